@@ -1,0 +1,5 @@
+import sys
+
+from cnc.cli import main
+
+sys.exit(main())

@@ -1,0 +1,61 @@
+"""Atomic file replacement for every file the controller writes (tool table, .var, positions).
+
+A reader (or a crash) sees either the old file or the new one, never a half-written one.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import tempfile
+from pathlib import Path
+
+
+def atomic_write_text(
+    path: str | os.PathLike[str], text: str, *, keep_backup: bool = False
+) -> None:
+    """Replace ``path`` with ``text``: write a temporary file beside it, fsync, rename.
+
+    With ``keep_backup`` the previous content is kept as ``path + '.bak'`` (LinuxCNC keeps
+    ``.var.bak`` this way).
+    """
+    target = Path(path)
+    directory = target.parent if str(target.parent) else Path(".")
+    fd, tmp_name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=directory)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as tmp:
+            tmp.write(text)
+            tmp.flush()
+            os.fsync(tmp.fileno())
+        if target.exists():
+            os.chmod(tmp_name, target.stat().st_mode & 0o7777)
+            if keep_backup:
+                backup = target.with_name(target.name + ".bak")
+                _copy_for_backup(target, backup)
+        os.replace(tmp_name, target)
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(tmp_name)
+        raise
+    _fsync_directory(directory)
+
+
+def _copy_for_backup(source: Path, backup: Path) -> None:
+    data = source.read_bytes()
+    fd, tmp_name = tempfile.mkstemp(prefix=f".{backup.name}.", dir=backup.parent)
+    with os.fdopen(fd, "wb") as tmp:
+        tmp.write(data)
+    os.replace(tmp_name, backup)
+
+
+def _fsync_directory(directory: Path) -> None:
+    try:
+        fd = os.open(directory, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)

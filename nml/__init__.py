@@ -1,0 +1,1 @@
+"""NML: typed messages through shared-memory buffers guarded by semaphores (SPEC NML-*)."""

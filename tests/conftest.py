@@ -1,0 +1,83 @@
+"""Shared fixtures: every test gets its own IPC instance and leaves nothing behind.
+
+- Each test runs with a unique ``CNC_INSTANCE``, so its shared-memory segments and
+  semaphores are named apart from any running machine and from other tests; whatever the
+  test leaves in /dev/shm is removed afterwards, and reported as a failure of the test.
+- ``procs`` starts real OS processes and kills any still running at teardown.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import itertools
+import os
+import signal
+import subprocess
+import sys
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from nml.ipcnames import INSTANCE_ENV, remove_instance_objects
+
+REPO = Path(__file__).resolve().parent.parent
+_counter = itertools.count()
+
+
+@pytest.fixture(autouse=True)
+def cnc_instance(monkeypatch: pytest.MonkeyPatch, request: pytest.FixtureRequest) -> Iterator[str]:
+    instance = f"t{os.getpid()}-{next(_counter)}"
+    monkeypatch.setenv(INSTANCE_ENV, instance)
+    yield instance
+    leftovers = remove_instance_objects(instance)
+    if leftovers and not request.node.get_closest_marker("allow_leftovers"):
+        pytest.fail(f"test left IPC objects behind (now removed): {leftovers}", pytrace=False)
+
+
+class Processes:
+    """Real OS processes started by a test; all are killed at teardown."""
+
+    def __init__(self) -> None:
+        self.started: list[subprocess.Popen[str]] = []
+
+    def start(
+        self, *args: str, env: dict[str, str] | None = None, **kwargs
+    ) -> subprocess.Popen[str]:
+        full_env = dict(os.environ)
+        full_env["PYTHONPATH"] = str(REPO) + os.pathsep + full_env.get("PYTHONPATH", "")
+        full_env.update(env or {})
+        proc = subprocess.Popen(
+            list(args),
+            env=full_env,
+            cwd=kwargs.pop("cwd", REPO),
+            stdout=kwargs.pop("stdout", subprocess.PIPE),
+            stderr=kwargs.pop("stderr", subprocess.PIPE),
+            text=True,
+            start_new_session=True,
+            **kwargs,
+        )
+        self.started.append(proc)
+        return proc
+
+    def python(self, *args: str, **kwargs) -> subprocess.Popen[str]:
+        return self.start(sys.executable, *args, **kwargs)
+
+    def kill_all(self) -> None:
+        for proc in self.started:
+            if proc.poll() is None:
+                with contextlib.suppress(ProcessLookupError):
+                    os.killpg(proc.pid, signal.SIGKILL)
+            with contextlib.suppress(subprocess.TimeoutExpired, ValueError):
+                proc.communicate(timeout=5)
+
+
+@pytest.fixture
+def procs() -> Iterator[Processes]:
+    group = Processes()
+    yield group
+    group.kill_all()
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    config.addinivalue_line("markers", "allow_leftovers: the test checks cleanup itself")
