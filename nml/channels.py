@@ -1,0 +1,115 @@
+"""The controller's standard channels and a process's view of all its buffers (NML-036, 071).
+
+``Nml(config, process)`` opens every buffer the process has a P line for: the channel object
+of NML-036. ``message_sizes`` tells the configuration check how large the messages are that
+the controller writes to each standard buffer, so an undersized B line is caught when the
+file is parsed, not at the first write.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from nml import config as nml_config
+from nml.codec import Encoding, max_encoded_size
+from nml.config import BufferConfig, NmlConfig
+from nml.errors import NmlAccessError
+from nml.message import MessageKind, NMLmsg
+from nml.registry import REGISTRY
+from nml.shmem import ShmBuffer
+
+# Buffer names of LinuxCNC's linuxcnc.nml (NML-071) and of our task <-> motion pair.
+EMC_COMMAND = "emcCommand"
+EMC_STATUS = "emcStatus"
+EMC_ERROR = "emcError"
+TOOL_COMMAND = "toolCmd"
+TOOL_STATUS = "toolSts"
+MOTION_COMMAND = "motCommand"
+MOTION_STATUS = "motStatus"
+
+DEFAULT_NML_FILE = Path(__file__).resolve().parent.parent / "configs" / "common" / "cnc.nml"
+
+
+def _is_catalogue(cls: type[NMLmsg]) -> bool:
+    """Only the EMC catalogue sizes the standard buffers, not messages a test declares."""
+    return cls.__module__.startswith("nml.")
+
+
+def _is_io_type(type_id: int) -> bool:
+    return 1100 <= type_id < 1700
+
+
+def _is_motion_type(type_id: int) -> bool:
+    return 100 <= type_id < 400 or 1300 <= type_id < 1400
+
+
+def messages_of(buffer_name: str) -> list[type[NMLmsg]]:
+    """The message classes the controller writes to a standard buffer (empty: unknown)."""
+    import nml.emc  # noqa: F401  (registers the catalogue)
+
+    commands = [c for c in REGISTRY.of_kind(MessageKind.COMMAND) if _is_catalogue(c)]
+    by_name = REGISTRY.by_name
+    table: dict[str, list[type[NMLmsg]]] = {
+        EMC_COMMAND: commands,
+        EMC_STATUS: [c for c in (by_name("EMC_STAT"),) if c],
+        EMC_ERROR: [c for c in REGISTRY.of_kind(MessageKind.OPERATOR) if _is_catalogue(c)],
+        TOOL_COMMAND: [c for c in commands if _is_io_type(c.TYPE)],
+        TOOL_STATUS: [c for c in (by_name("EMC_IO_STAT"),) if c],
+        MOTION_COMMAND: [c for c in commands if _is_motion_type(c.TYPE)],
+        MOTION_STATUS: [c for c in (by_name("EMC_MOTION_STAT"),) if c],
+    }
+    return table.get(buffer_name, [])
+
+
+def message_sizes(buffer: BufferConfig) -> int | None:
+    """The largest encoded message the controller writes to ``buffer``, if it is standard."""
+    classes = messages_of(buffer.name)
+    if not classes:
+        return None
+    encoding = Encoding.from_neut(buffer.is_neutral)
+    return max(max_encoded_size(cls, encoding) for cls in classes)
+
+
+def load_config(path: str | Path | None = None) -> NmlConfig:
+    """Parse an NML file (default: ours) and check its sizes against our messages."""
+    return nml_config.load(path or DEFAULT_NML_FILE, message_sizes=message_sizes)
+
+
+class Nml:
+    """Every buffer one process is configured to use, opened (master) or attached."""
+
+    def __init__(self, config: NmlConfig, process: str, buffers: list[str] | None = None) -> None:
+        self.config = config
+        self.process = process
+        wanted = buffers or [p.buffer for p in config.processes if p.name == process]
+        wanted = [name for name in wanted if name != nml_config.DEFAULT_BUFFER]
+        if not wanted:
+            raise NmlAccessError(f"{config.path}: process '{process}' has no P lines")
+        self.channels: dict[str, ShmBuffer] = {}
+        try:
+            for name in wanted:
+                if name not in config.buffers:
+                    raise NmlAccessError(f"{config.path}: no B line for buffer '{name}'")
+                self.channels[name] = ShmBuffer(config.buffers[name], config.process(process, name))
+        except BaseException:
+            self.close()
+            raise
+
+    def __getitem__(self, buffer: str) -> ShmBuffer:
+        try:
+            return self.channels[buffer]
+        except KeyError:
+            raise NmlAccessError(
+                f"process {self.process} is not connected to buffer '{buffer}'"
+            ) from None
+
+    def close(self) -> None:
+        for channel in reversed(list(self.channels.values())):
+            channel.close()
+        self.channels.clear()
+
+    def __enter__(self) -> Nml:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()

@@ -1,0 +1,112 @@
+"""Encoding of messages into buffer bytes and back (NML-037, NML-038, NML-072).
+
+Every encoded message starts with a 16-byte NML header, distinct from the buffer's own
+header: type number, payload length, layout checksum of the declaring class, encoding.
+The payload is either the fixed layout (``neut`` 0: the message's raw bytes) or msgpack
+(``neut`` 1: a self-describing map of field names to values).
+
+Decoding checks everything it reads and raises ``NmlFormatError`` naming the cause; it
+never lets garbage through as a message.
+"""
+
+from __future__ import annotations
+
+import enum
+import struct
+
+import msgpack
+
+from nml.errors import NmlFormatError
+from nml.message import NMLmsg
+from nml.registry import REGISTRY
+
+HEADER = struct.Struct("<iIII")  # type, payload length, layout crc, encoding
+
+
+class Encoding(enum.IntEnum):
+    FIXED = 0
+    MSGPACK = 1
+
+    @classmethod
+    def from_neut(cls, neut: bool) -> Encoding:
+        return cls.MSGPACK if neut else cls.FIXED
+
+
+def encode(msg: NMLmsg, encoding: Encoding) -> bytes:
+    if encoding is Encoding.FIXED:
+        payload = msg._arr.tobytes()
+    else:
+        payload = msgpack.packb(msg.to_python(), use_bin_type=True)
+    return HEADER.pack(msg.TYPE, len(payload), msg.layout_crc, encoding) + payload
+
+
+def peek_type(data: bytes | bytearray | memoryview) -> int:
+    """The type number of an encoded message, without decoding it."""
+    if len(data) < HEADER.size:
+        raise NmlFormatError(f"message shorter than its {HEADER.size}-byte header")
+    return HEADER.unpack_from(data)[0]
+
+
+def decode(data: bytes | bytearray | memoryview, where: str = "buffer") -> NMLmsg:
+    """The message encoded in ``data``; ``where`` names the buffer in error messages."""
+    if len(data) < HEADER.size:
+        raise NmlFormatError(f"{where}: message shorter than its {HEADER.size}-byte header")
+    type_id, length, crc, encoding = HEADER.unpack_from(data)
+    cls = REGISTRY.by_type(type_id)
+    if cls is None:
+        raise NmlFormatError(f"{where}: unknown message type {type_id}")
+    if HEADER.size + length > len(data):
+        raise NmlFormatError(
+            f"{where}: {cls.NAME} claims {length} payload bytes, only "
+            f"{len(data) - HEADER.size} present"
+        )
+    if crc != cls.layout_crc:
+        raise NmlFormatError(
+            f"{where}: {cls.NAME} was written with a different field layout "
+            "(the writer runs another version of the message declarations)"
+        )
+    payload = memoryview(data)[HEADER.size : HEADER.size + length]
+    if encoding == Encoding.FIXED:
+        if length != cls.dtype.itemsize:
+            raise NmlFormatError(
+                f"{where}: {cls.NAME} payload is {length} bytes, expected {cls.dtype.itemsize}"
+            )
+        return cls.from_bytes(payload)  # type: ignore[return-value]
+    if encoding == Encoding.MSGPACK:
+        try:
+            values = msgpack.unpackb(payload, raw=False)
+        except (ValueError, msgpack.UnpackException) as exc:
+            raise NmlFormatError(f"{where}: {cls.NAME} msgpack payload is corrupt: {exc}") from None
+        if not isinstance(values, dict):
+            raise NmlFormatError(f"{where}: {cls.NAME} msgpack payload is not a map")
+        try:
+            return cls.from_python(values)  # type: ignore[return-value]
+        except (TypeError, ValueError, OverflowError) as exc:
+            raise NmlFormatError(f"{where}: {cls.NAME} field value is invalid: {exc}") from None
+    raise NmlFormatError(f"{where}: unknown encoding {encoding}")
+
+
+def max_encoded_size(cls: type[NMLmsg], encoding: Encoding) -> int:
+    """An upper bound of the encoded size of any instance of ``cls`` (for buffer sizes)."""
+    if encoding is Encoding.FIXED:
+        return HEADER.size + cls.dtype.itemsize
+    return HEADER.size + _msgpack_bound(cls)
+
+
+def _msgpack_bound(cls: type) -> int:
+    from nml.message import Array, Nested, Scalar, Text
+
+    def bound(marker: object) -> int:
+        if isinstance(marker, Scalar):
+            return 1 if marker.python is bool else 9
+        if isinstance(marker, Text):
+            return marker.length + 5
+        if isinstance(marker, Nested):
+            return _msgpack_bound(marker.struct)
+        if isinstance(marker, Array):
+            item = bound(marker.item) if isinstance(marker.item, Scalar) else None
+            each = item if item is not None else _msgpack_bound(marker.item)
+            return 5 + marker.length * each
+        raise TypeError(marker)
+
+    return 5 + sum(len(f.name) + 5 + bound(f.marker) for f in cls.fields)

@@ -1,0 +1,731 @@
+"""SHMEM buffers: POSIX shared memory guarded by POSIX named semaphores (NML-043..046).
+
+One segment per buffer, created by the master process (NML-032), laid out as::
+
+    header (128 bytes)  | connection slots (16 bytes x max_procs) | data area
+
+Two kinds, chosen by the B line's ``queue`` option:
+
+- **latest value** (status): one message. Writers serialise on the buffer's mutex semaphore
+  and publish under a sequence counter (seqlock): the counter is odd while a write is in
+  progress, and a reader retries until it has copied the message between two equal even
+  values. Readers therefore never see a torn write and never take the mutex, so any number
+  of UIs can poll status without ever delaying the writer.
+- **queue** (commands, errors): a FIFO ring of variable-length records, read and written
+  under the mutex. A message is consumed by exactly one read; a writer that finds no room
+  waits up to its timeout, then fails (NML-019).
+
+Blocking: each connection slot has its own wake semaphore. A process that wants to wait for
+data (or for room) marks its slot as waiting under the mutex and sleeps on its semaphore;
+whoever changes the buffer posts every waiting slot. No polling loop.
+
+Robustness: the mutex holder's pid is recorded. A waiter that cannot get the mutex checks
+whether the holder still lives; if it died, the waiter repairs the buffer (an interrupted
+status write is discarded, a queue is consistent by construction because the tail moves
+last) and releases the mutex, logging what happened. Corrupt content raises
+``NmlFormatError`` naming the buffer and never crashes the reader.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import math
+import mmap
+import os
+import struct
+import time
+from dataclasses import dataclass
+
+import posix_ipc
+
+from nml.codec import Encoding, decode, encode
+from nml.config import BufferConfig, ProcessConfig, describe_timeout
+from nml.errors import NmlAccessError, NmlFormatError, NmlTimeoutError
+from nml.ipcnames import ipc_name
+from nml.message import RCS_CMD_MSG, NMLmsg
+
+log = logging.getLogger("nml")
+
+MAGIC = 0x314C4D4E  # "NML1"
+LAYOUT_VERSION = 1
+KIND_LATEST, KIND_QUEUE = 0, 1
+WRAP = 0xFFFFFFFF
+_LOCK_SLICE_S = 0.2  # how often a waiter for the mutex checks that its holder is alive
+
+# Header fields: name -> (offset, struct format). All offsets are 8-byte aligned.
+_HEADER_FIELDS = {
+    "magic": (0, "<I"),
+    "version": (4, "<I"),
+    "kind": (8, "<I"),
+    "encoding": (12, "<I"),
+    "capacity": (16, "<Q"),
+    "max_procs": (24, "<I"),
+    "buffer_number": (28, "<I"),
+    "creator_pid": (32, "<q"),
+    "holder_pid": (40, "<q"),
+    "seq": (48, "<Q"),
+    "write_count": (56, "<Q"),
+    "read_count": (64, "<Q"),
+    "head": (72, "<Q"),
+    "tail": (80, "<Q"),
+    "used": (88, "<Q"),
+    "count": (96, "<Q"),
+    "next_serial": (104, "<Q"),
+    "latest_len": (112, "<Q"),
+}
+HEADER_SIZE = 128
+SLOT = struct.Struct("<iiII")  # pid, c_num, is_waiting, reserved
+RECORD = struct.Struct("<II")  # queue record: length, reserved
+_U64 = struct.Struct("<Q")
+_LATEST_STATE = struct.Struct("<QQQ")  # seq, write_count (offset 48..63) ... see _read_latest
+
+
+def _align8(n: int) -> int:
+    return (n + 7) & ~7
+
+
+def is_process_alive(pid: int) -> bool:
+    if pid <= 0:
+        return False
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+@dataclass(frozen=True)
+class BufferLayout:
+    """Where things are in a buffer's segment, derived from its B line."""
+
+    size: int
+    max_procs: int
+
+    @property
+    def slots_offset(self) -> int:
+        return HEADER_SIZE
+
+    @property
+    def data_offset(self) -> int:
+        return _align8(HEADER_SIZE + SLOT.size * self.max_procs)
+
+    @property
+    def capacity(self) -> int:
+        return max(0, (self.size - self.data_offset) & ~7)
+
+    @staticmethod
+    def bytes_needed(buffer: BufferConfig, largest_message: int) -> int:
+        """The smallest B-line size that holds ``largest_message`` encoded bytes."""
+        layout = BufferLayout(0, buffer.max_procs)
+        extra = RECORD.size + 7 if buffer.is_queue else 0
+        return layout.data_offset + largest_message + extra
+
+
+class ShmBuffer:
+    """One process's connection to one SHMEM buffer (the CMS of NML-046)."""
+
+    def __init__(
+        self, buffer: BufferConfig, process: ProcessConfig, *, is_observer: bool = False
+    ) -> None:
+        """Create (master) or attach to a buffer. An observer (``cnc nml ls``/``dump``) takes
+        no connection slot and only looks: peek, stats, queued."""
+        self.config = buffer
+        self.process = process
+        self.name = buffer.name
+        self.layout = BufferLayout(buffer.size, buffer.max_procs)
+        self.encoding = Encoding.from_neut(buffer.is_neutral)
+        self.is_queue = buffer.is_queue
+        self.is_master = process.is_master
+        self.timeout = process.timeout
+        self._shm_name = ipc_name("shm", buffer.name)
+        self._mutex_name = ipc_name("mutex", buffer.name)
+        self._repair_name = ipc_name("repair", buffer.name)
+        self._wake: dict[int, posix_ipc.Semaphore] = {}
+        self._slot = -1
+        self._last_seen = 0
+        self._is_locked = False
+        self._mm: mmap.mmap | None = None
+        self._view: memoryview | None = None
+        if self.layout.capacity < 64:
+            raise NmlAccessError(
+                f"{buffer.where}: buffer {self.name}: size {buffer.size} leaves no room for "
+                f"messages ({self.layout.data_offset} bytes of header for "
+                f"{buffer.max_procs} processes)"
+            )
+        if self.is_master:
+            self._create()
+        else:
+            self._attach()
+        if is_observer:
+            return
+        try:
+            self._claim_slot()
+        except BaseException:
+            self._release_resources(is_unlinking=self.is_master)
+            raise
+
+    # ------------------------------------------------------------------ lifecycle
+    def _create(self) -> None:
+        try:
+            shm = posix_ipc.SharedMemory(
+                self._shm_name, posix_ipc.O_CREX, mode=0o660, size=self.config.size
+            )
+        except posix_ipc.ExistentialError:
+            self._remove_stale_segment()
+            shm = posix_ipc.SharedMemory(
+                self._shm_name, posix_ipc.O_CREX, mode=0o660, size=self.config.size
+            )
+        self._map(shm)
+        for name in (self._mutex_name, self._repair_name):
+            with contextlib.suppress(posix_ipc.ExistentialError):
+                posix_ipc.unlink_semaphore(name)
+        self._mutex = posix_ipc.Semaphore(self._mutex_name, posix_ipc.O_CREX, 0o660, 1)
+        self._repair = posix_ipc.Semaphore(self._repair_name, posix_ipc.O_CREX, 0o660, 1)
+        self._put("version", LAYOUT_VERSION)
+        self._put("kind", KIND_QUEUE if self.is_queue else KIND_LATEST)
+        self._put("encoding", int(self.encoding))
+        self._put("capacity", self.layout.capacity)
+        self._put("max_procs", self.config.max_procs)
+        self._put("buffer_number", self.config.buffer_number & 0xFFFFFFFF)
+        self._put("creator_pid", os.getpid())
+        self._put("magic", MAGIC)  # last: attachers wait for it
+
+    def _remove_stale_segment(self) -> None:
+        """A segment with our name exists: reuse its name only if its creator is gone."""
+        try:
+            shm = posix_ipc.SharedMemory(self._shm_name)
+            with mmap.mmap(shm.fd, HEADER_SIZE) as mm:
+                creator = struct.unpack_from("<q", mm, _HEADER_FIELDS["creator_pid"][0])[0]
+            shm.close_fd()
+        except (posix_ipc.ExistentialError, ValueError, OSError):
+            creator = 0
+        if creator != os.getpid() and is_process_alive(creator):
+            raise NmlAccessError(
+                f"{self.config.where}: buffer {self.name} already exists and its master "
+                f"(pid {creator}) is running: is another instance of this machine up?"
+            )
+        log.warning(
+            "buffer %s: removing a stale segment left by pid %s, which is gone", self.name, creator
+        )
+        with contextlib.suppress(posix_ipc.ExistentialError):
+            posix_ipc.unlink_shared_memory(self._shm_name)
+
+    def _attach(self) -> None:
+        deadline = None if math.isinf(self.timeout) else time.monotonic() + self.timeout
+        delay = 0.001
+        while True:
+            problem = self._try_attach()
+            if problem is None:
+                return
+            if deadline is not None and time.monotonic() >= deadline:
+                raise NmlAccessError(
+                    f"buffer {self.name}: {problem} after waiting "
+                    f"{describe_timeout(self.timeout)} (is its master process running?)"
+                )
+            time.sleep(delay)
+            delay = min(delay * 2, 0.05)
+
+    def _try_attach(self) -> str | None:
+        try:
+            shm = posix_ipc.SharedMemory(self._shm_name)
+        except posix_ipc.ExistentialError:
+            return "shared memory segment does not exist"
+        if shm.size < self.config.size:
+            shm.close_fd()
+            return f"segment is {shm.size} bytes, the NML file says {self.config.size}"
+        self._map(shm)
+        if self._get("magic") != MAGIC:
+            self._unmap()
+            return "segment is not initialised"
+        mismatch = self._layout_mismatch()
+        if mismatch:
+            self._unmap()
+            raise NmlAccessError(f"buffer {self.name}: {mismatch} (created from another NML file?)")
+        try:
+            self._mutex = posix_ipc.Semaphore(self._mutex_name)
+            self._repair = posix_ipc.Semaphore(self._repair_name)
+        except posix_ipc.ExistentialError:
+            self._unmap()
+            return "semaphores do not exist"
+        return None
+
+    def _layout_mismatch(self) -> str | None:
+        expected = {
+            "version": LAYOUT_VERSION,
+            "kind": KIND_QUEUE if self.is_queue else KIND_LATEST,
+            "encoding": int(self.encoding),
+            "capacity": self.layout.capacity,
+            "max_procs": self.config.max_procs,
+        }
+        for key, value in expected.items():
+            actual = self._get(key)
+            if actual != value:
+                return f"segment has {key}={actual}, expected {value}"
+        return None
+
+    def _map(self, shm: posix_ipc.SharedMemory) -> None:
+        self._mm = mmap.mmap(shm.fd, self.config.size)
+        shm.close_fd()
+        self._view = memoryview(self._mm)
+
+    def _unmap(self) -> None:
+        if self._view is not None:
+            self._view.release()
+            self._view = None
+        if self._mm is not None:
+            self._mm.close()
+            self._mm = None
+
+    def close(self) -> None:
+        """Detach; the master also removes the segment and semaphores (ARCH-011)."""
+        if self._mm is None:
+            return
+        if self._slot >= 0:
+            with contextlib.suppress(NmlTimeoutError, ValueError):
+                self._lock(timeout=1.0)
+                try:
+                    SLOT.pack_into(self._mm, self._slot_offset(self._slot), 0, 0, 0, 0)
+                finally:
+                    self._unlock()
+        self._release_resources(is_unlinking=self.is_master)
+
+    def _release_resources(self, is_unlinking: bool) -> None:
+        self._unmap()
+        for sem in self._wake.values():
+            sem.close()
+        self._wake.clear()
+        for attr in ("_mutex", "_repair"):
+            sem = getattr(self, attr, None)
+            if sem is not None:
+                sem.close()
+                setattr(self, attr, None)
+        if is_unlinking:
+            with contextlib.suppress(posix_ipc.ExistentialError):
+                posix_ipc.unlink_shared_memory(self._shm_name)
+            for name in [self._mutex_name, self._repair_name] + [
+                self._wake_name(i) for i in range(self.config.max_procs)
+            ]:
+                with contextlib.suppress(posix_ipc.ExistentialError):
+                    posix_ipc.unlink_semaphore(name)
+
+    def __enter__(self) -> ShmBuffer:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # ------------------------------------------------------------------ header access
+    def _get(self, key: str) -> int:
+        offset, fmt = _HEADER_FIELDS[key]
+        return struct.unpack_from(fmt, self._mm, offset)[0]  # type: ignore[arg-type]
+
+    def _put(self, key: str, value: int) -> None:
+        offset, fmt = _HEADER_FIELDS[key]
+        struct.pack_into(fmt, self._mm, offset, value)  # type: ignore[arg-type]
+
+    def _slot_offset(self, index: int) -> int:
+        return self.layout.slots_offset + index * SLOT.size
+
+    def _wake_name(self, index: int) -> str:
+        return ipc_name("wake", f"{self.name}.{index}")
+
+    def _wake_sem(self, index: int) -> posix_ipc.Semaphore:
+        sem = self._wake.get(index)
+        if sem is None:
+            sem = posix_ipc.Semaphore(self._wake_name(index), posix_ipc.O_CREAT, 0o660, 0)
+            self._wake[index] = sem
+        return sem
+
+    # ------------------------------------------------------------------ connections
+    def _claim_slot(self) -> None:
+        """Take a connection slot; refuse a process beyond max_procs (NML-010)."""
+        self._lock()
+        try:
+            free, live = -1, []
+            for index in range(self.config.max_procs):
+                pid = SLOT.unpack_from(self._mm, self._slot_offset(index))[0]
+                if pid and not is_process_alive(pid):
+                    log.warning(
+                        "buffer %s: freeing the slot of pid %d, which died attached", self.name, pid
+                    )
+                    SLOT.pack_into(self._mm, self._slot_offset(index), 0, 0, 0, 0)
+                    pid = 0
+                if pid:
+                    live.append(pid)
+                elif free < 0:
+                    free = index
+            if free < 0:
+                raise NmlAccessError(
+                    f"buffer {self.name}: already {self.config.max_procs} connections (max_procs), "
+                    f"pids {', '.join(map(str, live))}; process {self.process.name} refused"
+                )
+            SLOT.pack_into(self._mm, self._slot_offset(free), os.getpid(), self.process.c_num, 0, 0)
+            self._slot = free
+        finally:
+            self._unlock()
+        sem = self._wake_sem(free)
+        while _try_acquire(sem):  # drop wake-ups meant for a previous owner of the slot
+            pass
+        self._last_seen = self._get("write_count")
+
+    def connections(self) -> list[tuple[int, int]]:
+        """(pid, c_num) of every process attached now."""
+        self._require_open()
+        found = []
+        for index in range(self.config.max_procs):
+            pid, c_num, _, _ = SLOT.unpack_from(self._mm, self._slot_offset(index))
+            if pid:
+                found.append((pid, c_num))
+        return found
+
+    # ------------------------------------------------------------------ mutex
+    def _lock(self, timeout: float | None = None) -> None:
+        """Take the mutex within the P-line timeout (NML-031), repairing after dead holders."""
+        limit = self.timeout if timeout is None else timeout
+        deadline = None if math.isinf(limit) else time.monotonic() + limit
+        while True:
+            wait = _LOCK_SLICE_S
+            if deadline is not None:
+                wait = max(0.0, min(wait, deadline - time.monotonic()))
+            try:
+                self._mutex.acquire(wait)
+            except posix_ipc.BusyError:
+                if self._repair_after_dead_holder():
+                    continue
+                if deadline is not None and time.monotonic() >= deadline:
+                    holder = self._get("holder_pid")
+                    raise NmlTimeoutError(
+                        f"buffer {self.name}: busy for {describe_timeout(limit)} "
+                        f"(held by pid {holder})"
+                    ) from None
+                continue
+            self._put("holder_pid", os.getpid())
+            self._is_locked = True
+            return
+
+    def _unlock(self) -> None:
+        self._put("holder_pid", 0)
+        self._is_locked = False
+        self._mutex.release()
+
+    def _repair_after_dead_holder(self) -> bool:
+        """If the mutex holder died, repair the buffer and free the mutex; True if done."""
+        holder = self._get("holder_pid")
+        if holder <= 0 or is_process_alive(holder):
+            return False
+        if not _try_acquire(self._repair, 0.05):
+            return False
+        try:
+            if self._get("holder_pid") != holder or self._mutex.value != 0:
+                return False  # somebody else repaired it meanwhile
+            message = f"buffer {self.name}: pid {holder} died holding the lock; recovered"
+            if not self.is_queue and self._get("seq") % 2:
+                self._put("latest_len", 0)
+                self._put("seq", self._get("seq") + 1)
+                message += " (its unfinished status write was discarded)"
+            log.error(message)
+            self._put("holder_pid", 0)
+            self._mutex.release()
+            return True
+        finally:
+            self._repair.release()
+
+    # ------------------------------------------------------------------ waking
+    def _wake_waiters(self) -> None:
+        """Post every slot marked waiting (called with the mutex held)."""
+        for index in range(self.config.max_procs):
+            offset = self._slot_offset(index)
+            pid, c_num, is_waiting, _ = SLOT.unpack_from(self._mm, offset)
+            if is_waiting:
+                SLOT.pack_into(self._mm, offset, pid, c_num, 0, 0)
+                self._wake_sem(index).release()
+
+    def _wait_for_change(self, is_ready, deadline: float | None) -> bool:  # type: ignore[no-untyped-def]
+        """Sleep until ``is_ready()`` (checked under the mutex) or the deadline; True if ready."""
+        if self._slot < 0:
+            raise NmlAccessError(f"buffer {self.name}: an observer cannot wait for messages")
+        sem = self._wake_sem(self._slot)
+        offset = self._slot_offset(self._slot)
+        while True:
+            self._lock()
+            try:
+                if is_ready():
+                    return True
+                while _try_acquire(sem):
+                    pass
+                SLOT.pack_into(self._mm, offset, os.getpid(), self.process.c_num, 1, 0)
+            finally:
+                self._unlock()
+            remaining = None if deadline is None else deadline - time.monotonic()
+            if remaining is not None and remaining <= 0:
+                return False
+            woke = _try_acquire(sem, remaining)
+            if not woke:
+                SLOT.pack_into(self._mm, offset, os.getpid(), self.process.c_num, 0, 0)
+                return is_ready()
+
+    # ------------------------------------------------------------------ write
+    def write(self, msg: NMLmsg) -> int:
+        """Write a message; returns the serial number given to a command, else 0.
+
+        Commands get the next serial number of this buffer, assigned under the mutex, so two
+        writers can never produce the same number (NML-041).
+        """
+        self._require_open()
+        if not self.process.can_write:
+            raise NmlAccessError(
+                f"process {self.process.name} may not write buffer {self.name} "
+                f"(ops {self.process.ops})"
+            )
+        is_command = isinstance(msg, RCS_CMD_MSG)
+        data = encode(msg, self.encoding)
+        limit = self.layout.capacity - (RECORD.size if self.is_queue else 0)
+        if len(data) > limit:
+            raise NmlFormatError(
+                f"buffer {self.name}: {msg.NAME} is {len(data)} bytes encoded, more than the "
+                f"{limit} the buffer holds (raise its size in the NML file)"
+            )
+        deadline = None if math.isinf(self.timeout) else time.monotonic() + self.timeout
+        self._lock()
+        try:
+            serial = 0
+            if is_command:
+                serial = self._get("next_serial") + 1 & 0x7FFFFFFF or 1
+                self._put("next_serial", serial)
+                msg.serial_number = serial
+                data = encode(msg, self.encoding)
+            if self.is_queue:
+                while not self._queue_has_room(len(data)):
+                    self._unlock()
+                    if not self._wait_for_change(lambda: self._queue_has_room(len(data)), deadline):
+                        raise NmlTimeoutError(
+                            f"buffer {self.name}: queue full ({self._get('count')} messages) for "
+                            f"{describe_timeout(self.timeout)}; {msg.NAME} not written"
+                        )
+                    self._lock()
+                self._queue_put(data)
+            else:
+                self._latest_put(data)
+            self._wake_waiters()
+            return serial
+        finally:
+            if self._is_locked:
+                self._unlock()
+
+    def _latest_put(self, data: bytes) -> None:
+        seq = self._get("seq")
+        self._put("seq", seq + 1)  # odd: write in progress
+        start = self.layout.data_offset
+        self._mm[start : start + len(data)] = data  # type: ignore[index]
+        self._put("latest_len", len(data))
+        self._put("write_count", self._get("write_count") + 1)
+        self._put("seq", seq + 2)
+
+    def _queue_has_room(self, length: int) -> bool:
+        need = RECORD.size + _align8(length)
+        capacity = self.layout.capacity
+        if self._get("count") == 0:
+            return need <= capacity
+        head, tail = self._get("head"), self._get("tail")
+        if tail > head:
+            return capacity - tail >= need or head >= need
+        return head - tail >= need
+
+    def _queue_put(self, data: bytes) -> None:
+        need = RECORD.size + _align8(len(data))
+        capacity = self.layout.capacity
+        base = self.layout.data_offset
+        if self._get("count") == 0:
+            head = tail = used = 0
+            self._put("head", 0)
+        else:
+            head, tail, used = self._get("head"), self._get("tail"), self._get("used")
+        if tail >= head and capacity - tail < need:
+            RECORD.pack_into(self._mm, base + tail, WRAP, 0)
+            used += capacity - tail
+            tail = 0
+        RECORD.pack_into(self._mm, base + tail, len(data), 0)
+        start = base + tail + RECORD.size
+        self._mm[start : start + len(data)] = data  # type: ignore[index]
+        self._put("used", used + need)
+        self._put("count", self._get("count") + 1)
+        self._put("write_count", self._get("write_count") + 1)
+        self._put("tail", (tail + need) % capacity)  # last: commits the record
+
+    # ------------------------------------------------------------------ read
+    def read(self) -> NMLmsg | None:
+        """A new message, or None: the oldest queued one (removed), or the status if it
+        changed since this connection last read it."""
+        self._require_readable()
+        if self.is_queue:
+            if self._slot < 0:
+                raise NmlAccessError(f"buffer {self.name}: an observer cannot consume messages")
+            return self._queue_take(is_removing=True)
+        data, count = self._latest_bytes()
+        if data is None or count == self._last_seen:
+            return None
+        self._last_seen = count
+        return decode(data, f"buffer {self.name}")
+
+    def peek(self) -> NMLmsg | None:
+        """The current status (new or not) or the oldest queued message, not removed."""
+        self._require_readable()
+        if self.is_queue:
+            return self._queue_take(is_removing=False)
+        data, _ = self._latest_bytes()
+        return None if data is None else decode(data, f"buffer {self.name}")
+
+    def blocking_read(self, timeout: float) -> NMLmsg | None:
+        """Wait for a new message up to ``timeout`` s (< 0: forever, 0: don't wait)."""
+        msg = self.read()
+        if msg is not None or timeout == 0:
+            return msg
+        deadline = None if timeout < 0 or math.isinf(timeout) else time.monotonic() + timeout
+        while True:
+            if not self._wait_for_change(self._has_new_data, deadline):
+                return None
+            msg = self.read()
+            if msg is not None:
+                return msg
+
+    def has_new_data(self) -> bool:
+        self._require_open()
+        return self._has_new_data()
+
+    def _has_new_data(self) -> bool:
+        if self.is_queue:
+            return self._get("count") > 0
+        return self._get("write_count") != self._last_seen
+
+    def _latest_bytes(self) -> tuple[bytearray | None, int]:
+        """Copy the status message out between two equal even sequence numbers (seqlock)."""
+        mm, view = self._mm, self._view
+        seq_at, len_at = _HEADER_FIELDS["seq"][0], _HEADER_FIELDS["latest_len"][0]
+        count_at = _HEADER_FIELDS["write_count"][0]
+        start = self.layout.data_offset
+        capacity = self.layout.capacity
+        spins = 0
+        while True:
+            seq = _U64.unpack_from(mm, seq_at)[0]  # type: ignore[arg-type]
+            if not seq & 1:
+                length = _U64.unpack_from(mm, len_at)[0]  # type: ignore[arg-type]
+                count = _U64.unpack_from(mm, count_at)[0]  # type: ignore[arg-type]
+                if length > capacity:
+                    if _U64.unpack_from(mm, seq_at)[0] == seq:  # type: ignore[arg-type]
+                        raise NmlFormatError(
+                            f"buffer {self.name}: header claims a {length}-byte message in a "
+                            f"{capacity}-byte buffer (corrupt)"
+                        )
+                    continue
+                data = bytearray(view[start : start + length]) if length else None  # type: ignore[index]
+                if _U64.unpack_from(mm, seq_at)[0] == seq:  # type: ignore[arg-type]
+                    return data, count
+            spins += 1
+            if spins > 100:
+                time.sleep(0.0001)
+                if spins % 1000 == 0 and self._repair_after_dead_holder():
+                    continue
+
+    def _queue_take(self, is_removing: bool) -> NMLmsg | None:
+        self._lock()
+        try:
+            if self._get("count") == 0:
+                return None
+            data = self._queue_front()
+            if is_removing:
+                self._queue_pop(len(data))
+                self._wake_waiters()
+        finally:
+            self._unlock()
+        return decode(data, f"buffer {self.name}")
+
+    def _queue_front(self) -> bytes:
+        base, capacity = self.layout.data_offset, self.layout.capacity
+        head = self._get("head")
+        length = RECORD.unpack_from(self._mm, base + head)[0]
+        if length == WRAP:
+            self._put("used", self._get("used") - (capacity - head))
+            head = 0
+            self._put("head", 0)
+            length = RECORD.unpack_from(self._mm, base)[0]
+        if head % 8 or RECORD.size + length > capacity - head:
+            discarded = self._get("count")
+            self._reset_queue()
+            raise NmlFormatError(
+                f"buffer {self.name}: queue record at offset {head} claims {length} bytes "
+                f"(corrupt); {discarded} queued message(s) discarded"
+            )
+        start = base + head + RECORD.size
+        return bytes(self._mm[start : start + length])  # type: ignore[index]
+
+    def _queue_pop(self, length: int) -> None:
+        need = RECORD.size + _align8(length)
+        count = self._get("count") - 1
+        if count == 0:
+            self._reset_queue()
+        else:
+            self._put("head", (self._get("head") + need) % self.layout.capacity)
+            self._put("used", self._get("used") - need)
+            self._put("count", count)
+        self._put("read_count", self._get("read_count") + 1)
+
+    def _reset_queue(self) -> None:
+        for key in ("head", "tail", "used", "count"):
+            self._put(key, 0)
+
+    # ------------------------------------------------------------------ inspection
+    def stats(self) -> dict[str, int]:
+        """Live counters for ``cnc nml ls``."""
+        self._require_open()
+        keys = ("write_count", "read_count", "count", "used", "next_serial", "creator_pid")
+        return {key: self._get(key) for key in keys}
+
+    def queued(self) -> list[NMLmsg | NmlFormatError]:
+        """Every queued message, oldest first, without removing them (``cnc nml dump``)."""
+        self._require_readable()
+        out: list[NMLmsg | NmlFormatError] = []
+        self._lock()
+        try:
+            base, capacity = self.layout.data_offset, self.layout.capacity
+            head = self._get("head")
+            for _ in range(self._get("count")):
+                length = RECORD.unpack_from(self._mm, base + head)[0]
+                if length == WRAP:
+                    head = 0
+                    length = RECORD.unpack_from(self._mm, base)[0]
+                if RECORD.size + length > capacity - head:
+                    out.append(NmlFormatError(f"buffer {self.name}: corrupt record at {head}"))
+                    break
+                start = base + head + RECORD.size
+                data = bytes(self._mm[start : start + length])  # type: ignore[index]
+                try:
+                    out.append(decode(data, f"buffer {self.name}"))
+                except NmlFormatError as exc:
+                    out.append(exc)
+                head = (head + RECORD.size + _align8(length)) % capacity
+        finally:
+            self._unlock()
+        return out
+
+    def _require_open(self) -> None:
+        if self._mm is None:
+            raise NmlAccessError(f"buffer {self.name}: connection is closed")
+
+    def _require_readable(self) -> None:
+        self._require_open()
+        if not self.process.can_read:
+            raise NmlAccessError(
+                f"process {self.process.name} may not read buffer {self.name} "
+                f"(ops {self.process.ops})"
+            )
+
+
+def _try_acquire(sem: posix_ipc.Semaphore, timeout: float | None = 0) -> bool:
+    try:
+        sem.acquire(timeout)
+    except posix_ipc.BusyError:
+        return False
+    return True

@@ -1,0 +1,233 @@
+"""SHMEM buffers within one process: kinds, timeouts, access rules, corrupt content."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterator
+
+import pytest
+
+from nml.config import NmlConfig, parse
+from nml.errors import NmlAccessError, NmlFormatError, NmlTimeoutError
+from nml.ipcnames import instance_objects
+from nml.shmem import ShmBuffer
+from tests.nml.sample_messages import TEST_BIG, TEST_CMD, TEST_STAT
+
+NML = """\
+B q  SHMEM localhost 2048  0 0 1 4 11 queue
+B s  SHMEM localhost 40000 0 0 2 4 12
+B sm SHMEM localhost 40000 1 0 3 4 13
+B tiny SHMEM localhost 1024 0 0 4 2 14
+P m  q  LOCAL localhost RW 0 0.2 1 0
+P m  s  LOCAL localhost RW 0 0.2 1 0
+P m  sm LOCAL localhost RW 0 0.2 1 0
+P m  tiny LOCAL localhost RW 0 0.2 1 0
+P r  q  LOCAL localhost RW 0 0.2 0 1
+P r  s  LOCAL localhost R  0 0.2 0 1
+P r  sm LOCAL localhost R  0 0.2 0 1
+P r  tiny LOCAL localhost R 0 0.2 0 1
+P w  q  LOCAL localhost W  0 0   0 2
+P late q LOCAL localhost R 0 0.3 0 3
+"""
+
+
+@pytest.fixture
+def cfg() -> NmlConfig:
+    return parse(NML, "test.nml")
+
+
+@pytest.fixture
+def opened(cfg: NmlConfig) -> Iterator:
+    buffers: list[ShmBuffer] = []
+
+    def open_buffer(process: str, buffer: str) -> ShmBuffer:
+        buf = ShmBuffer(cfg.buffers[buffer], cfg.process(process, buffer))
+        buffers.append(buf)
+        return buf
+
+    yield open_buffer
+    for buf in reversed(buffers):
+        buf.close()
+
+
+def test_queue_is_fifo_and_each_message_is_read_once(opened) -> None:
+    master, reader = opened("m", "q"), opened("r", "q")
+    for i in range(5):
+        master.write(TEST_CMD(index=i, text=f"#{i}"))
+    assert reader.peek().index == 0  # peek does not remove
+    assert [reader.read().index for _ in range(5)] == [0, 1, 2, 3, 4]
+    assert reader.read() is None
+    assert master.read() is None
+
+
+def test_queue_wraps_around_many_times_without_loss(opened) -> None:
+    master, reader = opened("m", "q"), opened("r", "q")
+    expected = 0
+    for i in range(500):
+        master.write(TEST_CMD(index=i, text="x" * (i % 60)))
+        if i % 3 == 2:  # drain in uneven batches so records straddle the ring's end
+            while (msg := reader.read()) is not None:
+                assert (msg.index, msg.text) == (expected, "x" * (expected % 60))
+                expected += 1
+    while (msg := reader.read()) is not None:
+        assert msg.index == expected
+        expected += 1
+    assert expected == 500
+
+
+def test_serial_numbers_increase_per_channel(opened) -> None:
+    master, writer = opened("m", "q"), opened("w", "q")
+    serials = [master.write(TEST_CMD()), writer.write(TEST_CMD()), master.write(TEST_CMD())]
+    assert serials == [1, 2, 3]
+    reader = opened("r", "q")
+    assert [reader.read().serial_number for _ in range(3)] == [1, 2, 3]
+
+
+def test_full_queue_waits_for_the_timeout_then_fails(opened) -> None:
+    master = opened("m", "q")
+    written = 0
+    with pytest.raises(NmlTimeoutError, match=r"buffer q: queue full \(\d+ messages\) for 0.2 s"):
+        while True:
+            master.write(TEST_CMD(index=written))
+            written += 1
+    assert written > 5
+    start = time.monotonic()
+    with pytest.raises(NmlTimeoutError):
+        master.write(TEST_CMD())
+    assert time.monotonic() - start >= 0.19  # it did wait (NML-031 timeout > 0)
+    reader = opened("r", "q")
+    assert [reader.read().index for _ in range(written)] == list(range(written))
+
+
+def test_zero_timeout_never_waits(opened) -> None:
+    opened("m", "q")
+    writer = opened("w", "q")  # timeout 0 (NML-031: fail at once)
+    with pytest.raises(NmlTimeoutError):
+        for _ in range(1000):
+            writer.write(TEST_CMD())
+
+
+def test_oversize_message_is_refused_not_truncated(opened) -> None:
+    master = opened("m", "q")
+    too_big = r"buffer q: TEST_BIG is 32.* bytes encoded, more than"
+    with pytest.raises(NmlFormatError, match=too_big):
+        master.write(TEST_BIG())
+    assert master.stats()["count"] == 0
+
+
+@pytest.mark.parametrize("buffer", ["s", "sm"])
+def test_latest_value_read_tells_new_from_seen_and_peek_repeats(opened, buffer: str) -> None:
+    master, reader = opened("m", buffer), opened("r", buffer)
+    assert reader.read() is None and reader.peek() is None
+    status = TEST_STAT(counter=1, echo_serial_number=7)
+    status.values[:] = 1.5
+    master.write(status)
+    first = reader.read()
+    assert (first.counter, first.echo_serial_number, first.values[1999]) == (1, 7, 1.5)
+    assert reader.read() is None  # already seen
+    assert reader.peek().counter == 1
+    status.counter = 2
+    master.write(status)
+    master.write(status)  # two writes, one new value
+    assert reader.read().counter == 2
+    assert reader.read() is None
+
+
+def test_ops_are_enforced(opened) -> None:
+    opened("m", "s")
+    reader = opened("r", "s")
+    with pytest.raises(NmlAccessError, match="process r may not write buffer s"):
+        reader.write(TEST_STAT())
+    opened("m", "q")
+    writer = opened("w", "q")
+    with pytest.raises(NmlAccessError, match="process w may not read buffer q"):
+        writer.read()
+
+
+def test_max_procs_is_enforced(cfg: NmlConfig, opened) -> None:
+    opened("m", "tiny")
+    opened("r", "tiny")
+    with pytest.raises(NmlAccessError, match="already 2 connections"):
+        opened("r", "tiny")
+
+
+def test_attach_without_master_fails_after_timeout(cfg: NmlConfig) -> None:
+    start = time.monotonic()
+    with pytest.raises(NmlAccessError, match="buffer q: shared memory segment does not exist"):
+        ShmBuffer(cfg.buffers["q"], cfg.process("late", "q"))
+    assert time.monotonic() - start >= 0.29
+
+
+def test_master_removes_everything_at_close(cfg: NmlConfig, cnc_instance: str) -> None:
+    master = ShmBuffer(cfg.buffers["q"], cfg.process("m", "q"))
+    reader = ShmBuffer(cfg.buffers["q"], cfg.process("r", "q"))
+    master.write(TEST_CMD())
+    reader.blocking_read(0)
+    assert instance_objects(cnc_instance)
+    reader.close()
+    master.close()
+    assert instance_objects(cnc_instance) == []
+
+
+def test_blocking_read_times_out_with_none(opened) -> None:
+    opened("m", "q")
+    reader = opened("r", "q")
+    start = time.monotonic()
+    assert reader.blocking_read(0.1) is None
+    assert time.monotonic() - start >= 0.09
+    assert reader.blocking_read(0) is None
+
+
+def test_garbage_in_a_status_buffer_is_a_clear_error(opened) -> None:
+    master, reader = opened("m", "s"), opened("r", "s")
+    master.write(TEST_STAT(counter=5))
+    start = master.layout.data_offset
+    master._mm[start : start + 4] = b"\x99\x99\x00\x00"  # unknown type
+    with pytest.raises(NmlFormatError, match="buffer s: unknown message type 39321"):
+        reader.peek()
+    master._put("latest_len", 10**9)
+    with pytest.raises(NmlFormatError, match="corrupt"):
+        reader.peek()
+    master.write(TEST_STAT(counter=6))  # the next good write is read normally
+    assert reader.peek().counter == 6
+
+
+def test_wrong_layout_and_short_payload_are_reported(opened) -> None:
+    master, reader = opened("m", "s"), opened("r", "s")
+    master.write(TEST_STAT())
+    start = master.layout.data_offset
+    master._mm[start + 8 : start + 12] = b"\x01\x02\x03\x04"  # layout checksum
+    with pytest.raises(NmlFormatError, match="different field layout"):
+        reader.peek()
+    master.write(TEST_STAT())
+    master._mm[start + 4 : start + 8] = (12).to_bytes(4, "little")  # payload length
+    with pytest.raises(NmlFormatError, match="payload is 12 bytes, expected"):
+        reader.peek()
+
+
+def test_garbage_in_a_queue_is_dropped_with_a_clear_error(opened) -> None:
+    master, reader = opened("m", "q"), opened("r", "q")
+    master.write(TEST_CMD(index=1))
+    master.write(TEST_CMD(index=2))
+    base = master.layout.data_offset
+    master._mm[base + 8 : base + 12] = b"\xff\xff\x00\x00"  # first message: unknown type
+    with pytest.raises(NmlFormatError, match="unknown message type"):
+        reader.read()
+    assert reader.read().index == 2  # the bad message was consumed, the good one survives
+    master.write(TEST_CMD(index=3))
+    head = master._get("head")
+    master._mm[base + head : base + head + 4] = (10**6).to_bytes(4, "little")  # record length
+    with pytest.raises(
+        NmlFormatError, match=r"queue record at offset 0 claims 1000000 bytes \(corrupt\); 1 queued"
+    ):
+        reader.read()
+    master.write(TEST_CMD(index=4))
+    assert reader.read().index == 4
+
+
+def test_msgpack_buffer_round_trips_text_and_arrays(opened) -> None:
+    master, reader = opened("m", "sm"), opened("r", "sm")
+    status = TEST_STAT(counter=9)
+    status.values[::2] = -2.25
+    master.write(status)
+    assert reader.read() == status
