@@ -1,0 +1,125 @@
+"""The parsed block (one line of NC code) and the code tables (INTERP-003)."""
+
+from __future__ import annotations
+
+# G codes are stored as 10 x the number, as LinuxCNC does (G38.2 -> 382).
+G_0, G_1, G_2, G_3, G_4, G_5, G_5_1, G_5_2, G_5_3 = 0, 10, 20, 30, 40, 50, 51, 52, 53
+G_7, G_8, G_10 = 70, 80, 100
+G_17, G_17_1, G_18, G_18_1, G_19, G_19_1 = 170, 171, 180, 181, 190, 191
+G_20, G_21, G_28, G_28_1, G_30, G_30_1 = 200, 210, 280, 281, 300, 301
+G_33, G_33_1, G_38_2, G_38_3, G_38_4, G_38_5 = 330, 331, 382, 383, 384, 385
+G_40, G_41, G_41_1, G_42, G_42_1, G_43, G_43_1, G_43_2, G_49 = (
+    400, 410, 411, 420, 421, 430, 431, 432, 490)
+G_52, G_53, G_54, G_55, G_56, G_57, G_58, G_59 = 520, 530, 540, 550, 560, 570, 580, 590
+G_59_1, G_59_2, G_59_3, G_61, G_61_1, G_64 = 591, 592, 593, 610, 611, 640
+G_70, G_71, G_71_1, G_71_2, G_72, G_72_1, G_72_2, G_73, G_74, G_76 = (
+    700, 710, 711, 712, 720, 721, 722, 730, 740, 760)
+G_80, G_81, G_82, G_83, G_84, G_85, G_86, G_87, G_88, G_89 = (
+    800, 810, 820, 830, 840, 850, 860, 870, 880, 890)
+G_90, G_90_1, G_91, G_91_1, G_92, G_92_1, G_92_2, G_92_3 = 900, 901, 910, 911, 920, 921, 922, 923
+G_93, G_94, G_95, G_96, G_97, G_98, G_99 = 930, 940, 950, 960, 970, 980, 990
+
+# modal groups (index into Block.g_modes)
+GM_MODAL_0, GM_MOTION, GM_SET_PLANE, GM_DISTANCE_MODE, GM_IJK_DISTANCE_MODE = 0, 1, 2, 3, 4
+GM_FEED_MODE, GM_LENGTH_UNITS, GM_CUTTER_COMP, GM_TOOL_LENGTH_OFFSET = 5, 6, 7, 8
+GM_RETRACT_MODE, GM_COORD_SYSTEM, GM_CONTROL_MODE, GM_SPINDLE_MODE = 10, 12, 13, 14
+GM_LATHE_DIAMETER_MODE, GM_G92_IS_APPLIED = 15, 16
+
+_G_GROUPS = {
+    0: [G_4, G_10, G_28, G_28_1, G_30, G_30_1, G_52, G_53, G_92, G_92_1, G_92_2, G_92_3],
+    1: [G_0, G_1, G_2, G_3, G_5, G_5_1, G_5_2, G_33, G_33_1, G_38_2, G_38_3, G_38_4, G_38_5,
+        G_70, G_71, G_71_1, G_71_2, G_72, G_72_1, G_72_2, G_73, G_74, G_76, G_80, G_81, G_82,
+        G_83, G_84, G_85, G_86, G_87, G_88, G_89],
+    2: [G_17, G_17_1, G_18, G_18_1, G_19, G_19_1],
+    3: [G_90, G_91],
+    4: [G_90_1, G_91_1],
+    5: [G_93, G_94, G_95],
+    6: [G_20, G_21],
+    7: [G_40, G_41, G_41_1, G_42, G_42_1],
+    8: [G_43, G_43_1, G_43_2, G_49],
+    10: [G_98, G_99],
+    12: [G_54, G_55, G_56, G_57, G_58, G_59, G_59_1, G_59_2, G_59_3],
+    13: [G_61, G_61_1, G_64],
+    14: [G_96, G_97],
+    15: [G_7, G_8],
+    16: [G_92_2, G_92_3],
+}
+# LinuxCNC's _gees: G5.3 is group 0; G92.1, G92.2 and G92.3 are group 16 (the group 0 entries above are
+# overridden below), G5/G5.1/G5.2 are motion.
+GEES: dict[int, int] = {}
+for _group, _codes in _G_GROUPS.items():
+    for _code in _codes:
+        GEES[_code] = _group
+GEES[G_5_3] = 0
+GEES[G_92_1] = 16
+GEES[G_92_2] = 16
+GEES[G_92_3] = 16
+
+# M code -> modal group (LinuxCNC's _ems)
+EMS: dict[int, int] = {0: 4, 1: 4, 2: 4, 3: 7, 4: 7, 5: 7, 6: 6, 7: 8, 8: 8, 9: 8, 19: 7,
+                       30: 4, 48: 9, 49: 9, 50: 9, 51: 9, 52: 9, 53: 9, 60: 4, 61: 6,
+                       62: 5, 63: 5, 64: 5, 65: 5, 66: 5, 67: 5, 68: 5, 70: 7, 71: 7,
+                       72: 7, 73: 7, 99: 4}
+for _m in range(100, 200):
+    EMS[_m] = 10
+
+# o-word types
+(O_none, O_sub, O_endsub, O_call, O_do, O_while, O_if, O_elseif, O_else, O_endif, O_break,
+ O_continue, O_endwhile, O_return, O_repeat, O_endrepeat, M_98, M_99, O_) = range(19)
+O_OPS = ["O_none", "O_sub", "O_endsub", "O_call", "O_do", "O_while", "O_if", "O_elseif",
+         "O_else", "O_endif", "O_break", "O_continue", "O_endwhile", "O_return", "O_repeat",
+         "O_endrepeat", "M_98", "M_99", "O_"]
+# call types
+CT_NONE, CT_NGC_OWORD_SUB, CT_NGC_M98_SUB = 0, 1, 2
+
+
+def is_a_cycle(motion: int) -> bool:
+    return (G_80 < motion < G_90) or motion == G_73 or motion == G_74
+
+
+class Block:
+    """One parsed line; word flags default to False and numbers to LinuxCNC's sentinels."""
+
+    __slots__ = (
+        "a_flag", "a_number", "b_flag", "b_number", "c_flag", "c_number", "comment",
+        "d_flag", "d_number_float", "dollar_flag", "dollar_number", "e_flag", "e_number",
+        "f_flag", "f_number", "g_modes", "h_flag", "h_number", "i_flag", "i_number",
+        "j_flag", "j_number", "k_flag", "k_number", "l_number", "l_flag", "line_number",
+        "n_number", "motion_to_be", "m_count", "m_modes", "user_m", "p_number", "p_flag",
+        "q_number", "q_flag", "r_flag", "r_number", "s_flag", "s_number", "t_flag",
+        "t_number", "u_flag", "u_number", "v_flag", "v_number", "w_flag", "w_number",
+        "x_flag", "x_number", "y_flag", "y_number", "z_flag", "z_number", "radius_flag",
+        "radius", "theta_flag", "theta", "offset", "o_type", "o_name", "call_type",
+        "params", "param_cnt",
+    )
+
+    def __init__(self) -> None:
+        self.a_flag = self.b_flag = self.c_flag = self.d_flag = self.dollar_flag = False
+        self.e_flag = self.f_flag = self.h_flag = self.i_flag = self.j_flag = False
+        self.k_flag = self.l_flag = self.p_flag = self.q_flag = self.r_flag = False
+        self.s_flag = self.t_flag = self.u_flag = self.v_flag = self.w_flag = False
+        self.x_flag = self.y_flag = self.z_flag = self.radius_flag = self.theta_flag = False
+        self.a_number = self.b_number = self.c_number = self.d_number_float = 0.0
+        self.dollar_number = self.e_number = self.f_number = self.i_number = 0.0
+        self.j_number = self.k_number = self.r_number = self.s_number = 0.0
+        self.u_number = self.v_number = self.w_number = 0.0
+        self.x_number = self.y_number = self.z_number = self.radius = self.theta = 0.0
+        self.t_number = 0
+        self.comment = ""
+        self.g_modes = [-1] * 17
+        self.m_modes = [-1] * 11
+        self.h_number = -1
+        self.l_number = -1
+        self.line_number = -1
+        self.n_number = -1
+        self.motion_to_be = -1
+        self.m_count = 0
+        self.user_m = 0
+        self.p_number = -1.0
+        self.q_number = -1.0
+        self.offset = 0
+        self.o_type = O_none
+        self.o_name = None
+        self.call_type = -1
+        self.params = None
+        self.param_cnt = 0

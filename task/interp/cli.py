@@ -1,0 +1,261 @@
+"""``cnc rs274``: the standalone interpreter, a drop-in for LinuxCNC's ``rs274`` (TASK-004).
+
+    cnc rs274 [-t TOOL_TABLE] [-v VAR_FILE] [-i INI] [-b] [-s] [-g] [-n 0|1|2] [FILE [OUT]]
+
+Output goes to stdout (or OUT) in rs274's format; ``executing``, errors and the failing line go
+to stderr; the exit status is 0, or 1 after an interpreter error (with ``-n 2``, the default).
+Without ``-g`` rs274's interactive menu is offered; without FILE lines are read from stdin.
+"""
+
+from __future__ import annotations
+
+import getopt
+import sys
+
+from iocontrol.tooltable import ToolTable
+
+from .canon import PrintingCanon
+from .errors import INTERP_ENDFILE, INTERP_EXECUTE_FINISH, INTERP_EXIT, INTERP_OK, InterpError
+from .interp import Interpreter
+
+DEFAULT_TOOL_TABLE = "/usr/share/doc/linuxcnc/examples/sample-configs/common/tool.tbl"
+DEFAULT_VAR_FILE = "/etc/emc2/sample-configs/sim/sim.var"
+USAGE = """Usage: {prog} [-p interp.so] [-t tool.tbl] [-v var-file.var] [-n 0|1|2]
+          [-b] [-s] [-g] [input file [output file]]
+
+    -p: Specify the pluggable interpreter to use
+    -t: Specify the .tbl (tool table) file to use
+    -v: Specify the .var (parameter) file to use
+    -n: Specify the continue mode:
+           0: continue
+           1: enter MDI mode
+           2: stop (default)
+    -b: Toggle the 'block delete' flag (default: OFF)
+    -s: Toggle the 'print stack' flag (default: OFF)
+    -g: Toggle the 'go (batch mode)' flag (default: OFF)
+    -i: specify the INI file (default: no INI file)
+    -T: call task_init()
+    -l: specify the log_level (default: -1)
+"""
+
+
+class _Out:
+    """Buffered writer for the canon; flushed before anything goes to stderr."""
+
+    def __init__(self, stream) -> None:
+        self.stream = stream
+        self.parts: list[str] = []
+        self.append = self.parts.append
+
+    def flush(self) -> None:
+        if self.parts:
+            self.stream.write("".join(self.parts))
+            self.parts.clear()
+        self.stream.flush()
+
+
+def _err(out: _Out, text: str) -> None:
+    out.flush()
+    sys.stderr.write(text)
+    sys.stderr.flush()
+
+
+def _report(out: _Out, interp: Interpreter, error: InterpError) -> None:
+    _err(out, f"{error.message}\n{interp.linetext}\n")
+
+
+def _read_line(prompt: str) -> str | None:
+    try:
+        return input(prompt)
+    except EOFError:
+        return None
+
+
+def interpret_from_keyboard(interp: Interpreter, out: _Out, block_delete: bool) -> int:
+    while True:
+        out.flush()
+        line = _read_line("READ => ")
+        if line is None or line == "quit":
+            return 0
+        try:
+            status = interp.read(line)
+            if status == INTERP_ENDFILE:
+                continue
+            status = interp.execute()
+        except InterpError as error:
+            _report(out, interp, error)
+
+
+def interpret_from_file(interp: Interpreter, out: _Out, do_next: int, block_delete: bool) -> int:
+    interp.canon.SET_BLOCK_DELETE(block_delete)
+    status = 0
+    while True:
+        try:
+            read_status = interp.read()
+        except InterpError as error:
+            _report(out, interp, error)
+            if do_next == 2:
+                return 1
+            if do_next == 1:
+                if not _mdi_then_continue(interp, out, block_delete):
+                    return 1
+            continue
+        if read_status == INTERP_ENDFILE:
+            break
+        if read_status not in (INTERP_OK, INTERP_EXECUTE_FINISH):
+            _err(out, "File not open\n\n")
+            if do_next == 2:
+                return 1
+            continue
+        try:
+            status = interp.execute()
+        except InterpError as error:
+            _report(out, interp, error)
+            status = 1
+            if do_next == 1:
+                if not _mdi_then_continue(interp, out, block_delete):
+                    break
+            elif do_next == 2:
+                break
+            continue
+        if status == INTERP_EXIT:
+            return 0
+        status = 0
+    return 1 if status == 1 else 0
+
+
+def _mdi_then_continue(interp: Interpreter, out: _Out, block_delete: bool) -> bool:
+    _err(out, "starting MDI\n")
+    interpret_from_keyboard(interp, out, block_delete)
+    _err(out, "continue program? y/n =>")
+    answer = sys.stdin.readline()
+    return answer.startswith("y")
+
+
+def main(argv: list[str]) -> int:
+    prog = "rs274"
+    try:
+        opts, args = getopt.getopt(argv, "p:t:v:bsn:gi:l:T")
+    except getopt.GetoptError:
+        sys.stderr.write(USAGE.format(prog=prog))
+        return 1
+    if len(args) > 2:
+        sys.stderr.write(USAGE.format(prog=prog))
+        return 1
+    tool_files: list[str] = []
+    var_file = DEFAULT_VAR_FILE
+    block_delete = False
+    do_next = 2
+    go = False
+    ini_path = None
+    task = 0
+    for opt, value in opts:
+        if opt == "-t":
+            tool_files.append(value)
+        elif opt == "-v":
+            var_file = value
+        elif opt == "-b":
+            block_delete = not block_delete
+        elif opt == "-n":
+            try:
+                do_next = int(value)
+            except ValueError:
+                do_next = 0
+        elif opt == "-g":
+            go = not go
+        elif opt == "-i":
+            ini_path = value
+        elif opt == "-T":
+            task = 1
+    stdout = sys.stdout
+    out_file = None
+    if len(args) == 2:
+        try:
+            out_file = open(args[1], "w", encoding="utf-8")  # noqa: SIM115
+        except OSError:
+            sys.stderr.write("executing\n")
+            sys.stderr.write(f"could not open output file {args[1]}\n")
+            return 1
+        stdout = out_file
+    out = _Out(stdout)
+    try:
+        return _run(args, out, tool_files, var_file, block_delete, do_next, go, ini_path, task)
+    finally:
+        out.flush()
+        if out_file is not None:
+            out_file.close()
+
+
+def _run(args, out, tool_files, var_file, block_delete, do_next, go, ini_path, task) -> int:
+    tools = ToolTable()
+    loaded = False
+    for name in tool_files:
+        if not _load_tools(tools, name, out):
+            loaded = False
+        else:
+            loaded = True
+    if not go:
+        if not _menu(out):
+            return 0
+    _err(out, "executing\n")
+    if not tool_files and not _load_tools(tools, DEFAULT_TOOL_TABLE, out):
+        return 1
+    del loaded
+    ini = None
+    if ini_path is not None:
+        from cnc.ini import IniError, IniFile
+
+        try:
+            ini = IniFile.load(ini_path)
+        except IniError:
+            _err(out, f"Unable to open inifile:{ini_path}:\n")
+    canon = PrintingCanon(out.append, tools)
+    interp = Interpreter(canon, ini=ini, parameter_file=var_file, task=task)
+    try:
+        interp.init()
+    except InterpError as error:
+        _report(out, interp, error)
+        return 1
+    if not args:
+        status = interpret_from_keyboard(interp, out, block_delete)
+    else:
+        try:
+            interp.open(args[0])
+        except InterpError as error:
+            _report(out, interp, error)
+            return 1
+        status = interpret_from_file(interp, out, do_next, block_delete)
+        interp.close()
+    interp.exit()
+    return status
+
+
+def _load_tools(tools: ToolTable, name: str, out: _Out) -> bool:
+    try:
+        skipped = tools.load(name, strict=False)
+    except OSError:
+        return False
+    for line in skipped:
+        out.append(f"File: {name} Unrecognized line skipped:\n    {line}")
+    return True
+
+
+def _menu(out: _Out) -> bool:
+    """rs274's start-up menu (without -g); only 'start interpreting' is offered here."""
+    while True:
+        _err(out, "enter a number:\n1 = start interpreting\n2 = choose parameter file ...\n"
+                  "3 = read tool file ...\n4 = turn block delete switch ON\n"
+                  "5 = adjust error handling...\nenter choice => ")
+        line = sys.stdin.readline()
+        if not line:
+            return True
+        try:
+            choice = int(line.split()[0])
+        except (ValueError, IndexError):
+            continue
+        if choice == 1:
+            return True
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))

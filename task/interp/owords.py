@@ -1,0 +1,396 @@
+"""O-word control flow: subroutines, calls, returns, loops and conditionals (INTERP-010/011).
+
+Like LinuxCNC, the interpreter executes a program by reading lines one at a time; control
+flow moves the read position (``file_pos``, a line index) and the line counter. A forward
+reference is found by *skipping*: lines are read but not executed until the wanted O-word
+comes by. Subroutines in other files are found in the current directory, PROGRAM_PREFIX and
+SUBROUTINE_PATH.
+"""
+
+from __future__ import annotations
+
+import os
+
+from .block import (
+    CT_NGC_M98_SUB,
+    CT_NGC_OWORD_SUB,
+    CT_NONE,
+    M_98,
+    M_99,
+    O_OPS,
+    O_,
+    Block,
+    O_break,
+    O_call,
+    O_continue,
+    O_do,
+    O_else,
+    O_elseif,
+    O_endif,
+    O_endrepeat,
+    O_endsub,
+    O_endwhile,
+    O_if,
+    O_none,
+    O_repeat,
+    O_return,
+    O_sub,
+    O_while,
+)
+from .errors import INTERP_OK, InterpError
+
+INTERP_SUB_ROUTINE_LEVELS = 10
+
+
+class Context:
+    """One call frame (LinuxCNC's ``context``)."""
+
+    __slots__ = ("position", "sequence_number", "filename", "subName", "m98_loop_counter",
+                 "context_status", "call_type", "saved_params", "named_params")
+
+    def __init__(self) -> None:
+        self.clear()
+
+    def clear(self) -> None:
+        self.position = 0
+        self.sequence_number = 0
+        self.filename = ""
+        self.subName: str | None = ""
+        self.m98_loop_counter = -1
+        self.context_status = 0
+        self.call_type = CT_NONE
+        self.saved_params = [0.0] * 30
+        self.named_params: dict[str, list] = {}
+
+
+class _Offset:
+    __slots__ = ("type", "offset", "filename", "repeat_count", "sequence_number")
+
+    def __init__(self, otype: int, offset: int, filename: str, sequence_number: int) -> None:
+        self.type = otype
+        self.offset = offset
+        self.filename = filename
+        self.repeat_count = -1
+        self.sequence_number = sequence_number
+
+
+class OWordMixin:
+    """Control functions; mixed into the Interpreter."""
+
+    def _oerr(self, message: str) -> None:
+        if self.feature_oword_warnonly:
+            import sys
+
+            sys.stderr.write(message)
+            return
+        raise InterpError(message)
+
+    def control_save_offset(self, block: Block) -> None:
+        op = self.offset_map.get(block.o_name)
+        if op is not None:
+            if self.sequence_number - 1 == op.sequence_number:
+                raise InterpError(
+                    f"File:{self.filename} line:{self.sequence_number} sub: o|{block.o_name}| "
+                    "found in illegal location")
+            raise InterpError(
+                f"File:{self.filename} line:{self.sequence_number} redefining sub: "
+                f"o|{block.o_name}| already defined in file:{op.filename}")
+        self.offset_map[block.o_name] = _Offset(block.o_type, block.offset, self.filename,
+                                                self.sequence_number - 1)
+
+    def control_find_oword(self, block: Block) -> _Offset:
+        op = self.offset_map.get(block.o_name)
+        if op is None:
+            raise InterpError("Unknown oword number")
+        return op
+
+    def enter_context(self, block: Block) -> None:
+        self.call_level += 1
+        if self.call_level >= INTERP_SUB_ROUTINE_LEVELS:
+            raise InterpError("Too many subroutine levels")
+        frame = self.sub_context[self.call_level]
+        frame.clear()
+        frame.subName = block.o_name
+        frame.call_type = block.call_type
+
+    def leave_context(self) -> None:
+        leaving = self.sub_context[self.call_level]
+        if self.call_level < 1:
+            raise InterpError("Bug: call stack underrun")
+        leaving.named_params.clear()
+        leaving.subName = None
+        self.call_level -= 1
+
+    def execute_call(self, frame: Context, call_type: int) -> None:
+        previous = self.sub_context[self.call_level - 1]
+        block = self.block
+        if self.skipping_o:
+            self.skipping_o = None
+        if call_type != CT_NGC_M98_SUB:
+            pars = self.parameters
+            previous.saved_params = pars[1:31]
+            pars[1:31] = block.params
+        previous.position = -1 if self.file_lines is None else self.file_pos
+        previous.filename = self.filename
+        previous.sequence_number = self.sequence_number
+        if self.feature_oword_n_args:
+            self.add_named_param("n_args", 1)
+            self.store_named_param("n_args", float(block.param_cnt), True)
+        if block.o_type == M_98 and block.l_flag:
+            if previous.m98_loop_counter == -1:
+                previous.m98_loop_counter = round(block.l_number)
+            previous.m98_loop_counter -= 1
+            if previous.m98_loop_counter > 0:
+                previous.position = block.offset
+                previous.sequence_number -= 1
+            else:
+                previous.m98_loop_counter = -1
+        if block.o_type == M_98 and block.l_flag and block.l_number == 0:
+            return
+        try:
+            self.control_back_to(block)
+        except InterpError:
+            self.call_level -= 1
+            raise InterpError(f"Unable to open file <{block.o_name}>") from None
+
+    def execute_return(self, frame: Context, call_type: int) -> None:
+        block = self.block
+        previous = self.sub_context[self.call_level - 1] if self.call_level > 0 else None
+        if self.skipping_o and block.o_type == O_endsub:
+            self.skipping_o = None
+        if self.call_level != 0:
+            if call_type != CT_NGC_M98_SUB:
+                self.parameters[1:31] = previous.saved_params
+            if previous.position == -1:
+                self.file_lines = None
+                self.filename = ""
+            else:
+                if self.file_lines is None:
+                    raise InterpError("File not open")
+                if self.filename != previous.filename:
+                    lines = self._open_cached(previous.filename)
+                    if lines is None:
+                        raise InterpError(
+                            f"cannot reopen file {previous.filename} - removed or renamed? "
+                            "(No such file or directory)")
+                    self.file_lines = lines
+                    self.filename = previous.filename
+                self.file_pos = previous.position
+                self.sequence_number = previous.sequence_number
+            self.leave_context()
+            self.sub_name = previous.subName if previous.subName else None
+        elif block.o_type == O_endsub:
+            if self.defining_sub != 1:
+                raise InterpError("Not in subroutine definition")
+            if self.skipping_o:
+                self.skipping_o = None
+            self.defining_sub = 0
+            self.sub_name = None
+
+    def control_back_to(self, block: Block) -> None:
+        name = os.path.basename(block.o_name)
+        op = self.offset_map.get(name)
+        if op is not None:
+            if self.filename and self.file_lines is None:
+                raise InterpError("File not open")
+            if self.filename != op.filename:
+                lines = self._open_cached(op.filename)
+                self.sequence_number = 0
+                self.filename = op.filename
+                if lines is None:
+                    raise InterpError(f"Unable to open file <{self.filename}>")
+                self.file_lines = lines
+            if self.file_lines is not None:
+                self.file_pos = op.offset
+            self.sequence_number = op.sequence_number
+            return
+        found = self.find_ngc_file(block.o_name)
+        if found is not None:
+            path, lines = found
+            self.sequence_number = 0
+            self.file_lines = lines
+            self.file_pos = 0
+            self.filename = path
+        self.skipping_o = name
+        self.skipping_to_sub = name
+        self.skipping_start = self.sequence_number
+
+    def find_ngc_file(self, basename: str):
+        target = os.path.expanduser(basename) + ".ngc"
+        candidates = [target, (self.program_prefix or "") + "/" + target]
+        candidates += [d + "/" + target for d in self.subroutines]
+        for path in candidates:
+            if os.path.isfile(path):
+                lines = self._open_cached(path)
+                if lines is not None:
+                    return path, lines
+        return None
+
+    def convert_control_functions(self, block: Block) -> int:
+        otype = block.o_type
+        if self.skipping_o and self.skipping_o != block.o_name:
+            return INTERP_OK
+        if self.skipping_to_sub and otype != O_sub and otype != O_:
+            return INTERP_OK
+        if otype == O_none:
+            return INTERP_OK
+        if otype in (O_sub, O_):
+            frame = self.sub_context[self.call_level]
+            if otype == O_ and frame.call_type not in (CT_NGC_M98_SUB, CT_NONE):
+                raise InterpError("Fanuc 'O....' subroutine must be called with 'M98'")
+            if otype == O_sub and frame.call_type not in (CT_NGC_OWORD_SUB, CT_NONE):
+                raise InterpError("'O.... sub' subroutine must be called with 'O.... call'")
+            if self.skipping_o:
+                self.control_save_offset(block)
+                self.skipping_o = None
+            self.skipping_to_sub = None
+            if otype == O_:
+                return INTERP_OK
+            if self.call_level == 0:
+                if self.defining_sub == 1:
+                    raise InterpError("Nested subroutine definition")
+                self.control_save_offset(block)
+                self.skipping_o = block.o_name
+                self.skipping_start = self.sequence_number
+                self.defining_sub = 1
+                self.sub_name = block.o_name
+        elif otype in (O_endsub, O_return, M_99):
+            if otype == M_99 and self.call_level == 0:
+                raise InterpError(
+                    "Bug:  Reached convert_control_functions() from M99 in main program")
+            if self.call_level == 0 and self.sub_name is None:
+                self._oerr(f"{self.sequence_number}: not in a subroutine definition: "
+                           f"'{self.linetext}'")
+            frame = self.sub_context[self.call_level]
+            if frame.call_type == CT_NGC_M98_SUB and otype != M_99:
+                raise InterpError("Fanuc 'O....' subroutine definition must end with 'M99'")
+            if frame.call_type == CT_NGC_OWORD_SUB and otype not in (O_endsub, O_return):
+                raise InterpError("'O.... endsub' or 'O.... return' must follow 'O.... sub' "
+                                  "subroutine definition")
+            self.execute_return(frame, frame.call_type)
+        elif otype in (O_call, M_98):
+            self.enter_context(block)
+            frame = self.sub_context[self.call_level]
+            self.execute_call(frame, frame.call_type)
+        elif otype == O_do:
+            self.skipping_o = None
+            if block.o_name not in self.offset_map:
+                self.control_save_offset(block)
+        elif otype in (O_repeat, O_while):
+            op = self.offset_map.get(block.o_name)
+            if op is not None:
+                if (otype == O_repeat or op.type != O_do) and \
+                        self.sequence_number != op.sequence_number + 1:
+                    self._oerr(f"{self.sequence_number}: duplicate O-word label: "
+                               f"'{self.linetext}' - defined in line {op.sequence_number + 1}")
+            else:
+                self.control_save_offset(block)
+            self.skipping_o = None
+            op = self.offset_map.get(block.o_name)
+            if op is None or op.type == otype:
+                if op is None:
+                    self.control_save_offset(block)
+                    op = self.offset_map[block.o_name]
+                if otype == O_repeat:
+                    if op.repeat_count == -1:
+                        op.repeat_count = round(self.test_value)
+                    if op.repeat_count > 0:
+                        op.repeat_count -= 1
+                    else:
+                        self.skipping_o = block.o_name
+                        self.skipping_start = self.sequence_number
+                        op.repeat_count = -1
+                elif self.test_value == 0.0:
+                    self.skipping_o = block.o_name
+                    self.skipping_start = self.sequence_number
+            elif otype == O_while:  # the 'while' of a do/while
+                if self.test_value != 0.0 and not self.doing_break:
+                    self.control_back_to(block)
+                else:
+                    self.doing_break = 0
+        elif otype == O_if:
+            op = self.offset_map.get(block.o_name)
+            if op is not None:
+                if self.sequence_number != op.sequence_number + 1:
+                    self._oerr(f"{self.sequence_number}: duplicate O-word label - already "
+                               f"defined in line {op.sequence_number + 1}: '{self.linetext}'")
+            else:
+                self.control_save_offset(block)
+            if self.test_value != 0.0:
+                self.skipping_o = None
+                self.executed_if = 1
+            else:
+                self.skipping_o = block.o_name
+                self.skipping_start = self.sequence_number
+                self.executed_if = 0
+        elif otype in (O_elseif, O_else):
+            op = self._find_label(block)
+            if op is not None and op.type != O_if:
+                self._oerr(f"{self.sequence_number}: no matching 'if' label: '{self.linetext}'"
+                           f" (found '{O_OPS[op.type][2:]}' in line {op.sequence_number + 1})")
+            if otype == O_elseif:
+                if self.skipping_o and self.skipping_o != block.o_name:
+                    return INTERP_OK
+                if self.executed_if:
+                    self.skipping_o = block.o_name
+                    self.skipping_start = self.sequence_number
+                    return INTERP_OK
+                if self.test_value != 0.0:
+                    self.skipping_o = None
+                    self.executed_if = 1
+            else:
+                if self.executed_if:
+                    self.skipping_o = block.o_name
+                    self.skipping_start = self.sequence_number
+                    return INTERP_OK
+                if self.skipping_o and self.skipping_o == block.o_name:
+                    self.executed_if = 1
+                    self.skipping_o = None
+        elif otype == O_endif:
+            op = self._find_label(block)
+            if op is not None and op.type != O_if:
+                self._oerr(f"{self.sequence_number}: no matching label: '{block.o_name}' (found "
+                           f"'{O_OPS[op.type][2:]}' in line {op.sequence_number + 1}): "
+                           f"'{self.linetext}'")
+            self.skipping_o = None
+            self.executed_if = 1
+        elif otype in (O_break, O_continue):
+            op = self._find_label(block)
+            if op is not None and op.type not in (O_while, O_do):
+                self._oerr(f"{self.sequence_number}: no matching while/do label: "
+                           f"'{self.linetext}' (found '{O_OPS[op.type][2:]}' in line "
+                           f"{op.sequence_number + 1})")
+            if otype == O_break:
+                self.skipping_o = block.o_name
+                self.skipping_start = self.sequence_number
+                self.doing_break = 1
+            else:
+                if self.skipping_o and self.skipping_o == block.o_name:
+                    return INTERP_OK
+                self.skipping_o = block.o_name
+                self.skipping_start = self.sequence_number
+                self.doing_continue = 1
+        elif otype in (O_endrepeat, O_endwhile):
+            op = self._find_label(block)
+            if op is not None and ((otype == O_endrepeat and op.type != O_repeat)
+                                   or (otype == O_endwhile and op.type != O_while)):
+                self._oerr(f"{self.sequence_number}: no matching label: '{self.linetext}' "
+                           f"(found '{O_OPS[op.type][2:]}' in line {op.sequence_number + 1})")
+            if self.skipping_o and self.skipping_o == block.o_name:
+                self.skipping_o = None
+                if self.doing_continue:
+                    self.doing_continue = 0
+                    self.control_back_to(block)
+                else:
+                    return INTERP_OK
+            else:
+                self.control_back_to(block)
+        else:
+            raise InterpError("Unknown control command in o word")
+        return INTERP_OK
+
+    def _find_label(self, block: Block) -> _Offset | None:
+        op = self.offset_map.get(block.o_name)
+        if op is None:
+            self._oerr(f"{self.sequence_number}: undefined O-word label: '{self.linetext}'")
+        return op
