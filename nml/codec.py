@@ -2,8 +2,11 @@
 
 Every encoded message starts with a 16-byte NML header, distinct from the buffer's own
 header: type number, payload length, layout checksum of the declaring class, encoding.
-The payload is either the fixed layout (``neut`` 0: the message's raw bytes) or msgpack
-(``neut`` 1: a self-describing map of field names to values).
+The payload is either the fixed layout (``neut`` 0: the message's raw little-endian bytes)
+or msgpack (``neut`` 1: the machine-independent form, LinuxCNC's XDR counterpart: a msgpack
+array of every leaf value in declaration order). Field order is fixed by the declaration
+and guarded by the layout checksum (NML-038); names come from the declaration when a
+message is shown (``cnc nml dump``).
 
 Decoding checks everything it reads and raises ``NmlFormatError`` naming the cause; it
 never lets garbage through as a message.
@@ -12,6 +15,7 @@ never lets garbage through as a message.
 from __future__ import annotations
 
 import enum
+import re
 import struct
 
 import msgpack
@@ -36,7 +40,7 @@ def encode(msg: NMLmsg, encoding: Encoding) -> bytes:
     if encoding is Encoding.FIXED:
         payload = msg._arr.tobytes()
     else:
-        payload = msgpack.packb(msg.to_python(), use_bin_type=True)
+        payload = msgpack.packb(msg.to_flat(), use_bin_type=True)
     return HEADER.pack(msg.TYPE, len(payload), msg.layout_crc, encoding) + payload
 
 
@@ -74,15 +78,15 @@ def decode(data: bytes | bytearray | memoryview, where: str = "buffer") -> NMLms
         return cls.from_bytes(payload)  # type: ignore[return-value]
     if encoding == Encoding.MSGPACK:
         try:
-            values = msgpack.unpackb(payload, raw=False)
+            values = msgpack.unpackb(payload, raw=True, use_list=False)
         except (ValueError, msgpack.UnpackException) as exc:
             raise NmlFormatError(f"{where}: {cls.NAME} msgpack payload is corrupt: {exc}") from None
-        if not isinstance(values, dict):
-            raise NmlFormatError(f"{where}: {cls.NAME} msgpack payload is not a map")
+        if not isinstance(values, tuple):
+            raise NmlFormatError(f"{where}: {cls.NAME} msgpack payload is not an array")
         try:
-            return cls.from_python(values)  # type: ignore[return-value]
-        except (TypeError, ValueError, OverflowError) as exc:
-            raise NmlFormatError(f"{where}: {cls.NAME} field value is invalid: {exc}") from None
+            return cls.from_flat(values)  # type: ignore[return-value]
+        except struct.error as exc:
+            raise NmlFormatError(f"{where}: {cls.NAME} msgpack values do not fit: {exc}") from None
     raise NmlFormatError(f"{where}: unknown encoding {encoding}")
 
 
@@ -93,20 +97,9 @@ def max_encoded_size(cls: type[NMLmsg], encoding: Encoding) -> int:
     return HEADER.size + _msgpack_bound(cls)
 
 
-def _msgpack_bound(cls: type) -> int:
-    from nml.message import Array, Nested, Scalar, Text
-
-    def bound(marker: object) -> int:
-        if isinstance(marker, Scalar):
-            return 1 if marker.python is bool else 9
-        if isinstance(marker, Text):
-            return marker.length + 5
-        if isinstance(marker, Nested):
-            return _msgpack_bound(marker.struct)
-        if isinstance(marker, Array):
-            item = bound(marker.item) if isinstance(marker.item, Scalar) else None
-            each = item if item is not None else _msgpack_bound(marker.item)
-            return 5 + marker.length * each
-        raise TypeError(marker)
-
-    return 5 + sum(len(f.name) + 5 + bound(f.marker) for f in cls.fields)
+def _msgpack_bound(cls: type[NMLmsg]) -> int:
+    """Worst-case msgpack bytes of the flat value array: 9 per number, a header per text."""
+    codes = cls.flat_format.format.lstrip("<")
+    texts = [int(n) for n in re.findall(r"(\d+)s", codes)]
+    numbers = len(re.sub(r"\d+s", "", codes))
+    return 5 + 9 * numbers + sum(length + 5 for length in texts)

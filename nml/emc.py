@@ -25,7 +25,6 @@ holds the subsystem's value (task state, spindle state).
 from __future__ import annotations
 
 import enum
-from typing import Any
 
 from nml.message import (
     RCS_CMD_MSG,
@@ -776,11 +775,7 @@ class EMC_SPINDLE_ON(EMC_SPINDLE_CMD_MSG, type_id=1304):
     speed: f64  # rpm, or the maximum rpm in constant surface speed mode
     factor: f64  # constant surface speed numerator; 0 for a fixed rpm
     xoffset: f64
-    wait_for_spindle_at_speed: i32
-
-    def __init__(self, **values: Any) -> None:
-        values.setdefault("wait_for_spindle_at_speed", 1)
-        super().__init__(**values)
+    wait_for_spindle_at_speed: i32 = 1
 
 
 class EMC_SPINDLE_OFF(EMC_SPINDLE_CMD_MSG, type_id=1305):

@@ -26,6 +26,7 @@ duplicate numbers and names (NML-050) and maps numbers to names (NML-051).
 from __future__ import annotations
 
 import enum
+import struct
 import zlib
 from dataclasses import dataclass
 from typing import Annotated, Any, ClassVar, get_args, get_origin, get_type_hints
@@ -234,7 +235,10 @@ class Struct:
     """A plain data structure with a fixed layout (``EmcPose``, ``CANON_TOOL_TABLE`` ...)."""
 
     fields: ClassVar[tuple[Field, ...]] = ()
+    defaults: ClassVar[dict[str, Any]] = {}
     dtype: ClassVar[np.dtype] = np.dtype([])
+    flat_format: ClassVar[struct.Struct] = struct.Struct("<")
+    flat_text_indexes: ClassVar[tuple[int, ...]] = ()
     layout_crc: ClassVar[int] = 0
     __slots__ = ("_arr",)
 
@@ -245,6 +249,7 @@ class Struct:
     @classmethod
     def _declare_fields(cls) -> None:
         hints = get_type_hints(cls, include_extras=True)
+        defaults = dict(cls.defaults)
         fields = []
         for name, hint in hints.items():
             if get_origin(hint) is ClassVar or name.startswith("_"):
@@ -256,17 +261,42 @@ class Struct:
                     "(use f64, i32, boolean, string(n), array(item, n) or a Struct)"
                 )
             fields.append(Field(name, marker))
+            declared = cls.__dict__.get(name)
+            if declared is not None and not isinstance(declared, _ScalarField):
+                defaults[name] = declared  # `speed: f64 = 1.0` in the class body
             setattr(cls, name, _descriptor(name, marker))
         cls.fields = tuple(fields)
+        cls.defaults = defaults
         cls.dtype = np.dtype([f.marker.dtype_entry(f.name) for f in fields])
+        codes = _flat_codes(cls.dtype)
+        cls.flat_format = struct.Struct("<" + "".join(codes))
+        cls.flat_text_indexes = tuple(i for i, code in enumerate(codes) if code.endswith("s"))
         cls.layout_crc = zlib.crc32(f"{cls.__name__}:{cls.dtype.descr}".encode())
 
     def __init__(self, **values: Any) -> None:
-        self._arr = np.zeros((), self.dtype)
+        self._arr = type(self)._template().copy()
         for name, value in values.items():
             if not isinstance(getattr(type(self), name, None), _ScalarField):
                 raise TypeError(f"{type(self).__name__} has no field '{name}'")
             setattr(self, name, value)
+
+    @classmethod
+    def _template(cls) -> np.ndarray:
+        """A record holding every declared default, nested structs' defaults included."""
+        template = cls.__dict__.get("_template_arr")
+        if template is None:
+            template = np.zeros((), cls.dtype)
+            for f in cls.fields:
+                marker = f.marker
+                if isinstance(marker, Nested):
+                    template[f.name] = marker.struct._template()
+                elif isinstance(marker, Array) and not isinstance(marker.item, Scalar):
+                    template[f.name][...] = marker.item._template()
+            view = cls._view(template)
+            for name, value in cls.defaults.items():
+                setattr(view, name, value)
+            cls._template_arr = template
+        return template
 
     @classmethod
     def _view(cls, arr: np.ndarray) -> Struct:
@@ -289,7 +319,20 @@ class Struct:
         arr = np.frombuffer(bytearray(data), dtype=cls.dtype, count=1).reshape(())
         return cls._view(arr)
 
-    # python / msgpack form -----------------------------------------------------
+    # flat form (msgpack payload) ------------------------------------------------
+    def to_flat(self) -> list[Any]:
+        """Every leaf value in declaration order; texts as bytes without their NUL padding."""
+        values = list(self.flat_format.unpack(self._arr.tobytes()))
+        for index in self.flat_text_indexes:
+            values[index] = values[index].rstrip(b"\0")
+        return values
+
+    @classmethod
+    def from_flat(cls, values: list[Any] | tuple[Any, ...]) -> Struct:
+        data = bytearray(cls.flat_format.pack(*values))
+        return cls._view(np.frombuffer(data, dtype=cls.dtype, count=1).reshape(()))
+
+    # python form (dump, APIs) ------------------------------------------------------
     def to_python(self) -> dict[str, Any]:
         return _to_python(type(self), self._arr)
 
@@ -310,6 +353,31 @@ class Struct:
     def __repr__(self) -> str:
         parts = ", ".join(f"{f.name}={getattr(self, f.name)!r}" for f in self.fields)
         return f"{type(self).__name__}({parts})"
+
+
+_STRUCT_CODES = {
+    "f8": "d",
+    "f4": "f",
+    "i1": "b",
+    "u1": "B",
+    "i4": "i",
+    "u4": "I",
+    "i8": "q",
+    "u8": "Q",
+    "b1": "?",
+}
+
+
+def _flat_codes(dtype: np.dtype) -> list[str]:
+    """``struct`` codes of every leaf of a (packed, little-endian) dtype, in layout order."""
+    if dtype.fields is not None:
+        return [code for name in dtype.names for code in _flat_codes(dtype.fields[name][0])]
+    if dtype.subdtype is not None:
+        item, shape = dtype.subdtype
+        return _flat_codes(item) * int(np.prod(shape))
+    if dtype.kind == "S":
+        return [f"{dtype.itemsize}s"]
+    return [_STRUCT_CODES[f"{dtype.kind}{dtype.itemsize}"]]
 
 
 def _descriptor(name: str, marker: Scalar | Text | Array | Nested) -> _ScalarField:
@@ -424,10 +492,5 @@ class RCS_STAT_MSG(NMLmsg, kind=MessageKind.STATUS):
 
     command_type: i32
     echo_serial_number: i32
-    status: i32
+    status: i32 = RCS_STATUS.UNINITIALIZED
     state: i32
-
-    def __init__(self, **values: Any) -> None:
-        super().__init__(**values)
-        if "status" not in values:
-            self.status = RCS_STATUS.UNINITIALIZED

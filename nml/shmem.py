@@ -99,7 +99,8 @@ def is_process_alive(pid: int) -> bool:
 
 @dataclass(frozen=True)
 class BufferLayout:
-    """Where things are in a buffer's segment, derived from its B line."""
+    """Where things are in a buffer's segment. The B line's ``size`` is all for messages: the
+    header and connection slots come on top, so LinuxCNC's own sizes keep their meaning."""
 
     size: int
     max_procs: int
@@ -114,14 +115,16 @@ class BufferLayout:
 
     @property
     def capacity(self) -> int:
-        return max(0, (self.size - self.data_offset) & ~7)
+        return max(0, self.size & ~7)
+
+    @property
+    def segment_size(self) -> int:
+        return self.data_offset + self.capacity
 
     @staticmethod
     def bytes_needed(buffer: BufferConfig, largest_message: int) -> int:
         """The smallest B-line size that holds ``largest_message`` encoded bytes."""
-        layout = BufferLayout(0, buffer.max_procs)
-        extra = RECORD.size + 7 if buffer.is_queue else 0
-        return layout.data_offset + largest_message + extra
+        return largest_message + (RECORD.size + 7 if buffer.is_queue else 0)
 
 
 class ShmBuffer:
@@ -149,12 +152,6 @@ class ShmBuffer:
         self._is_locked = False
         self._mm: mmap.mmap | None = None
         self._view: memoryview | None = None
-        if self.layout.capacity < 64:
-            raise NmlAccessError(
-                f"{buffer.where}: buffer {self.name}: size {buffer.size} leaves no room for "
-                f"messages ({self.layout.data_offset} bytes of header for "
-                f"{buffer.max_procs} processes)"
-            )
         if self.is_master:
             self._create()
         else:
@@ -171,12 +168,12 @@ class ShmBuffer:
     def _create(self) -> None:
         try:
             shm = posix_ipc.SharedMemory(
-                self._shm_name, posix_ipc.O_CREX, mode=0o660, size=self.config.size
+                self._shm_name, posix_ipc.O_CREX, mode=0o660, size=self.layout.segment_size
             )
         except posix_ipc.ExistentialError:
             self._remove_stale_segment()
             shm = posix_ipc.SharedMemory(
-                self._shm_name, posix_ipc.O_CREX, mode=0o660, size=self.config.size
+                self._shm_name, posix_ipc.O_CREX, mode=0o660, size=self.layout.segment_size
             )
         self._map(shm)
         for name in (self._mutex_name, self._repair_name):
@@ -233,9 +230,9 @@ class ShmBuffer:
             shm = posix_ipc.SharedMemory(self._shm_name)
         except posix_ipc.ExistentialError:
             return "shared memory segment does not exist"
-        if shm.size < self.config.size:
+        if shm.size < self.layout.segment_size:
             shm.close_fd()
-            return f"segment is {shm.size} bytes, the NML file says {self.config.size}"
+            return f"segment is {shm.size} bytes, expected {self.layout.segment_size}"
         self._map(shm)
         if self._get("magic") != MAGIC:
             self._unmap()
@@ -267,7 +264,7 @@ class ShmBuffer:
         return None
 
     def _map(self, shm: posix_ipc.SharedMemory) -> None:
-        self._mm = mmap.mmap(shm.fd, self.config.size)
+        self._mm = mmap.mmap(shm.fd, self.layout.segment_size)
         shm.close_fd()
         self._view = memoryview(self._mm)
 
