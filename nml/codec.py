@@ -19,6 +19,7 @@ import re
 import struct
 
 import msgpack
+import numpy as np
 
 from nml.errors import NmlFormatError
 from nml.message import NMLmsg
@@ -52,7 +53,11 @@ def peek_type(data: bytes | bytearray | memoryview) -> int:
 
 
 def decode(data: bytes | bytearray | memoryview, where: str = "buffer") -> NMLmsg:
-    """The message encoded in ``data``; ``where`` names the buffer in error messages."""
+    """The message encoded in ``data``; ``where`` names the buffer in error messages.
+
+    A fixed-layout message decoded from a ``bytearray`` keeps using that bytearray's memory
+    (no copy): pass a bytearray only if nothing else will change it.
+    """
     if len(data) < HEADER.size:
         raise NmlFormatError(f"{where}: message shorter than its {HEADER.size}-byte header")
     type_id, length, crc, encoding = HEADER.unpack_from(data)
@@ -69,13 +74,15 @@ def decode(data: bytes | bytearray | memoryview, where: str = "buffer") -> NMLms
             f"{where}: {cls.NAME} was written with a different field layout "
             "(the writer runs another version of the message declarations)"
         )
-    payload = memoryview(data)[HEADER.size : HEADER.size + length]
     if encoding == Encoding.FIXED:
         if length != cls.dtype.itemsize:
             raise NmlFormatError(
                 f"{where}: {cls.NAME} payload is {length} bytes, expected {cls.dtype.itemsize}"
             )
-        return cls.from_bytes(payload)  # type: ignore[return-value]
+        if isinstance(data, bytearray):  # a private copy already: decode in place
+            return cls._view(np.ndarray((), cls.dtype, data, HEADER.size))  # type: ignore[return-value]
+        return cls.from_bytes(memoryview(data)[HEADER.size : HEADER.size + length])  # type: ignore[return-value]
+    payload = memoryview(data)[HEADER.size : HEADER.size + length]
     if encoding == Encoding.MSGPACK:
         try:
             values = msgpack.unpackb(payload, raw=True, use_list=False)

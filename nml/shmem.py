@@ -48,7 +48,7 @@ from nml.message import RCS_CMD_MSG, NMLmsg
 log = logging.getLogger("nml")
 
 MAGIC = 0x314C4D4E  # "NML1"
-LAYOUT_VERSION = 1
+LAYOUT_VERSION = 2
 KIND_LATEST, KIND_QUEUE = 0, 1
 WRAP = 0xFFFFFFFF
 _LOCK_SLICE_S = 0.2  # how often a waiter for the mutex checks that its holder is alive
@@ -66,19 +66,19 @@ _HEADER_FIELDS = {
     "holder_pid": (40, "<q"),
     "seq": (48, "<Q"),
     "write_count": (56, "<Q"),
-    "read_count": (64, "<Q"),
-    "head": (72, "<Q"),
-    "tail": (80, "<Q"),
-    "used": (88, "<Q"),
-    "count": (96, "<Q"),
-    "next_serial": (104, "<Q"),
-    "latest_len": (112, "<Q"),
+    "latest_len": (64, "<Q"),
+    "read_count": (72, "<Q"),
+    "head": (80, "<Q"),
+    "tail": (88, "<Q"),
+    "used": (96, "<Q"),
+    "count": (104, "<Q"),
+    "next_serial": (112, "<Q"),
 }
 HEADER_SIZE = 128
 SLOT = struct.Struct("<iiII")  # pid, c_num, is_waiting, reserved
 RECORD = struct.Struct("<II")  # queue record: length, reserved
 _U64 = struct.Struct("<Q")
-_LATEST_STATE = struct.Struct("<QQQ")  # seq, write_count (offset 48..63) ... see _read_latest
+_LATEST_STATE = struct.Struct("<QQQ")  # seq, write_count, latest_len: read in one go
 
 
 def _align8(n: int) -> int:
@@ -600,16 +600,13 @@ class ShmBuffer:
     def _latest_bytes(self) -> tuple[bytearray | None, int]:
         """Copy the status message out between two equal even sequence numbers (seqlock)."""
         mm, view = self._mm, self._view
-        seq_at, len_at = _HEADER_FIELDS["seq"][0], _HEADER_FIELDS["latest_len"][0]
-        count_at = _HEADER_FIELDS["write_count"][0]
+        seq_at = _HEADER_FIELDS["seq"][0]
         start = self.layout.data_offset
         capacity = self.layout.capacity
         spins = 0
         while True:
-            seq = _U64.unpack_from(mm, seq_at)[0]  # type: ignore[arg-type]
+            seq, count, length = _LATEST_STATE.unpack_from(mm, seq_at)  # type: ignore[arg-type]
             if not seq & 1:
-                length = _U64.unpack_from(mm, len_at)[0]  # type: ignore[arg-type]
-                count = _U64.unpack_from(mm, count_at)[0]  # type: ignore[arg-type]
                 if length > capacity:
                     if _U64.unpack_from(mm, seq_at)[0] == seq:  # type: ignore[arg-type]
                         raise NmlFormatError(
