@@ -76,8 +76,10 @@ def list_buffers(config: NmlConfig) -> str:
         connection = _open_live(buffer)
         if connection is not None:
             stats = connection.stats()
-            attached = len(connection.connections())
-            live = f"written {stats['write_count']}, attached {attached}"
+            pids = [str(pid) for pid, _ in connection.connections()]
+            live = f"written {stats['write_count']}, attached {len(pids)}"
+            if pids:
+                live += f" (pids {' '.join(pids)})"
             if buffer.is_queue:
                 live += f", queued {stats['count']}, read {stats['read_count']}"
             connection.close()

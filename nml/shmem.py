@@ -78,6 +78,7 @@ HEADER_SIZE = 128
 SLOT = struct.Struct("<iiII")  # pid, c_num, is_waiting, reserved
 RECORD = struct.Struct("<II")  # queue record: length, reserved
 _U64 = struct.Struct("<Q")
+_IDENTITY = struct.Struct("<II")  # magic, version at offset 0
 _LATEST_STATE = struct.Struct("<QQQ")  # seq, write_count, latest_len: read in one go
 
 
@@ -710,6 +711,12 @@ class ShmBuffer:
 
     def _require_readable(self) -> None:
         self._require_open()
+        if _IDENTITY.unpack_from(self._mm, 0) != (MAGIC, LAYOUT_VERSION):  # type: ignore[arg-type]
+            magic, version = _IDENTITY.unpack_from(self._mm, 0)  # type: ignore[arg-type]
+            raise NmlFormatError(
+                f"buffer {self.name}: segment header is corrupt (magic {magic:#x}, layout "
+                f"version {version}; expected {MAGIC:#x}, {LAYOUT_VERSION})"
+            )
         if not self.process.can_read:
             raise NmlAccessError(
                 f"process {self.process.name} may not read buffer {self.name} "

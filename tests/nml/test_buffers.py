@@ -231,3 +231,13 @@ def test_msgpack_buffer_round_trips_text_and_arrays(opened) -> None:
     status.values[::2] = -2.25
     master.write(status)
     assert reader.read() == status
+
+
+def test_overwritten_segment_header_is_a_clear_error(opened) -> None:
+    master, reader = opened("m", "s"), opened("r", "s")
+    master.write(TEST_STAT(counter=1))
+    master._mm[0:4] = b"JUNK"
+    with pytest.raises(NmlFormatError, match="buffer s: segment header is corrupt"):
+        reader.peek()
+    master._mm[0:4] = (0x314C4D4E).to_bytes(4, "little")
+    assert reader.peek().counter == 1

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -61,10 +62,8 @@ def test_ls_shows_buffers_and_live_counts(running: dict[str, ShmBuffer]) -> None
     result = cnc("nml", "ls")
     assert result.returncode == 0, result.stderr
     lines = {line.split()[0]: line for line in result.stdout.splitlines()}
-    assert (
-        "queue" in lines["emcCommand"]
-        and "written 1, attached 1, queued 1" in (lines["emcCommand"])
-    )
+    assert "queue" in lines["emcCommand"]
+    assert f"written 1, attached 1 (pids {os.getpid()}), queued 1" in lines["emcCommand"]
     assert "latest" in lines["emcStatus"] and lines["emcError"].rstrip().endswith("-")
     assert "xemc(R,c10,10 s)" in lines["emcStatus"]
 
