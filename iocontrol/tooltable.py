@@ -2,7 +2,7 @@
 
 One tool per line::
 
-    T<tool> P<pocket> [X..W<offset>] [D<diameter>] [I<frontangle>] [J<backangle>] [Q<orient>] [;comment]
+    T<tool> P<pocket> [X..W<offset>] [D<diam>] [I<frontangle>] [J<backangle>] [Q<orient>] [;comment]
 
 Words are separated by blanks and are case-insensitive; everything after ``;`` is the comment.
 
@@ -186,7 +186,9 @@ class ToolTable:
             lines = handle.read().splitlines(keepends=True)
         return self.load_lines(lines, name, strict=strict)
 
-    def load_lines(self, lines: list[str], name: str = "<tools>", *, strict: bool = True) -> list[str]:
+    def load_lines(
+        self, lines: list[str], name: str = "<tools>", *, strict: bool = True
+    ) -> list[str]:
         self.clear()
         skipped: list[str] = []
         next_index = 1
@@ -236,7 +238,7 @@ class ToolTable:
                 continue
             pocket = idx if self.random_toolchanger else entry.pocketno
             parts = [f"T{entry.toolno:<3d} P{pocket:<3d}"]
-            values = [("D", entry.diameter)] + list(zip(AXES, entry.offset, strict=True))
+            values = [("D", entry.diameter), *list(zip(AXES, entry.offset, strict=True))]
             values += [("I", entry.frontangle), ("J", entry.backangle)]
             for letter, value in values:
                 if value:

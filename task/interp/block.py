@@ -44,8 +44,8 @@ _G_GROUPS = {
     15: [G_7, G_8],
     16: [G_92_2, G_92_3],
 }
-# LinuxCNC's _gees: G5.3 is group 0; G92.1, G92.2 and G92.3 are group 16 (the group 0 entries above are
-# overridden below), G5/G5.1/G5.2 are motion.
+# LinuxCNC's _gees: G5.3 is group 0; G92.1, G92.2 and G92.3 are group 16 (overriding the
+# group 0 entries above); G5, G5.1 and G5.2 are motion.
 GEES: dict[int, int] = {}
 for _group, _codes in _G_GROUPS.items():
     for _code in _codes:
@@ -74,23 +74,77 @@ CT_NONE, CT_NGC_OWORD_SUB, CT_NGC_M98_SUB = 0, 1, 2
 
 
 def is_a_cycle(motion: int) -> bool:
-    return (G_80 < motion < G_90) or motion == G_73 or motion == G_74
+    return G_80 < motion < G_90 or motion in (G_73, G_74)
 
 
 class Block:
     """One parsed line; word flags default to False and numbers to LinuxCNC's sentinels."""
 
     __slots__ = (
-        "a_flag", "a_number", "b_flag", "b_number", "c_flag", "c_number", "comment",
-        "d_flag", "d_number_float", "dollar_flag", "dollar_number", "e_flag", "e_number",
-        "f_flag", "f_number", "g_modes", "h_flag", "h_number", "i_flag", "i_number",
-        "j_flag", "j_number", "k_flag", "k_number", "l_number", "l_flag", "line_number",
-        "n_number", "motion_to_be", "m_count", "m_modes", "user_m", "p_number", "p_flag",
-        "q_number", "q_flag", "r_flag", "r_number", "s_flag", "s_number", "t_flag",
-        "t_number", "u_flag", "u_number", "v_flag", "v_number", "w_flag", "w_number",
-        "x_flag", "x_number", "y_flag", "y_number", "z_flag", "z_number", "radius_flag",
-        "radius", "theta_flag", "theta", "offset", "o_type", "o_name", "call_type",
-        "params", "param_cnt",
+        "a_flag",
+        "a_number",
+        "b_flag",
+        "b_number",
+        "c_flag",
+        "c_number",
+        "call_type",
+        "comment",
+        "d_flag",
+        "d_number_float",
+        "dollar_flag",
+        "dollar_number",
+        "e_flag",
+        "e_number",
+        "f_flag",
+        "f_number",
+        "g_modes",
+        "h_flag",
+        "h_number",
+        "i_flag",
+        "i_number",
+        "j_flag",
+        "j_number",
+        "k_flag",
+        "k_number",
+        "l_flag",
+        "l_number",
+        "line_number",
+        "m_count",
+        "m_modes",
+        "motion_to_be",
+        "n_number",
+        "o_name",
+        "o_type",
+        "offset",
+        "p_flag",
+        "p_number",
+        "param_cnt",
+        "params",
+        "q_flag",
+        "q_number",
+        "r_flag",
+        "r_number",
+        "radius",
+        "radius_flag",
+        "s_flag",
+        "s_number",
+        "t_flag",
+        "t_number",
+        "theta",
+        "theta_flag",
+        "u_flag",
+        "u_number",
+        "user_m",
+        "v_flag",
+        "v_number",
+        "w_flag",
+        "w_number",
+        "x_flag",
+        "x_number",
+        "y_flag",
+        "y_number",
+        "z_flag",
+        "z_number",
     )
 
     def __init__(self) -> None:

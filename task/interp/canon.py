@@ -537,10 +537,10 @@ class PrintingCanon:
 
     # ------------------------------------------------------------- world model
     def GET_EXTERNAL_POSITION(self) -> list[float]:
-        return self.position + [0.0, 0.0, 0.0]
+        return [*self.position, 0.0, 0.0, 0.0]
 
     def GET_EXTERNAL_PROBE_POSITION(self) -> list[float]:
-        return self.probe_position + [0.0, 0.0, 0.0]
+        return [*self.probe_position, 0.0, 0.0, 0.0]
 
     def GET_EXTERNAL_PROBE_TRIPPED_VALUE(self) -> int:
         return 0

@@ -39,6 +39,17 @@ USAGE = """Usage: {prog} [-p interp.so] [-t tool.tbl] [-v var-file.var] [-n 0|1|
 """
 
 
+def _write_bytes(stream, text: str) -> None:
+    """Programs are read as latin-1, so writing latin-1 gives back their bytes unchanged."""
+    binary = getattr(stream, "buffer", None)
+    if binary is not None:
+        stream.flush()
+        binary.write(text.encode("latin-1", errors="replace"))
+        binary.flush()
+    else:
+        stream.write(text)
+
+
 class _Out:
     """Buffered writer for the canon; flushed before anything goes to stderr."""
 
@@ -49,14 +60,14 @@ class _Out:
 
     def flush(self) -> None:
         if self.parts:
-            self.stream.write("".join(self.parts))
+            _write_bytes(self.stream, "".join(self.parts))
             self.parts.clear()
         self.stream.flush()
 
 
 def _err(out: _Out, text: str) -> None:
     out.flush()
-    sys.stderr.write(text)
+    _write_bytes(sys.stderr, text)
     sys.stderr.flush()
 
 
@@ -96,9 +107,8 @@ def interpret_from_file(interp: Interpreter, out: _Out, do_next: int, block_dele
             _report(out, interp, error)
             if do_next == 2:
                 return 1
-            if do_next == 1:
-                if not _mdi_then_continue(interp, out, block_delete):
-                    return 1
+            if do_next == 1 and not _mdi_then_continue(interp, out, block_delete):
+                return 1
             continue
         if read_status == INTERP_ENDFILE:
             break
@@ -190,13 +200,9 @@ def _run(args, out, tool_files, var_file, block_delete, do_next, go, ini_path, t
     tools = ToolTable()
     loaded = False
     for name in tool_files:
-        if not _load_tools(tools, name, out):
-            loaded = False
-        else:
-            loaded = True
-    if not go:
-        if not _menu(out):
-            return 0
+        loaded = bool(_load_tools(tools, name, out))
+    if not go and not _menu(out):
+        return 0
     _err(out, "executing\n")
     if not tool_files and not _load_tools(tools, DEFAULT_TOOL_TABLE, out):
         return 1
@@ -210,7 +216,10 @@ def _run(args, out, tool_files, var_file, block_delete, do_next, go, ini_path, t
         except IniError:
             _err(out, f"Unable to open inifile:{ini_path}:\n")
     canon = PrintingCanon(out.append, tools)
-    interp = Interpreter(canon, ini=ini, parameter_file=var_file, task=task)
+    interp = Interpreter(canon, parameter_file=var_file, task=task)
+    # rs274 builds its interpreter before it names the INI file, so the predefined
+    # #<_metric_machine> never sees it (-1); the INI counts from init() on.
+    interp.ini = ini
     try:
         interp.init()
     except InterpError as error:

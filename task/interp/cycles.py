@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 
-from . import canon as C
+from . import canon as C  # noqa: N812  (C.PLANE_XY reads like CANON_PLANE_XY)
 from .block import G_73, G_74, G_81, G_82, G_83, G_84, G_85, G_86, G_87, G_88, G_89, Block
 from .errors import InterpError
 

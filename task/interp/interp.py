@@ -11,10 +11,12 @@ the machine's, and the parameter file and tool table are in those ("user") units
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 
-from . import canon as C
+from . import canon as C  # noqa: N812  (C.PLANE_XY reads like CANON_PLANE_XY)
+from . import ldmath
 from .block import (
     CT_NGC_M98_SUB,
     CT_NONE,
@@ -35,6 +37,7 @@ from .block import (
     G_19,
     G_19_1,
     G_20,
+    G_21,
     G_28,
     G_28_1,
     G_30,
@@ -82,6 +85,7 @@ from .block import (
     G_90,
     G_90_1,
     G_91,
+    G_91_1,
     G_92,
     G_92_1,
     G_92_2,
@@ -92,6 +96,7 @@ from .block import (
     G_96,
     G_97,
     G_98,
+    G_99,
     GM_CONTROL_MODE,
     GM_COORD_SYSTEM,
     GM_CUTTER_COMP,
@@ -108,8 +113,8 @@ from .block import (
     GM_SPINDLE_MODE,
     GM_TOOL_LENGTH_OFFSET,
     M_98,
-    O_none,
     Block,
+    O_none,
     is_a_cycle,
 )
 from .cycles import CyclesMixin
@@ -150,7 +155,7 @@ def rotate(x: float, y: float, theta: float) -> tuple[float, float]:
 
 
 def _round_to_int(x: float) -> int:
-    return int(round(x))  # nearbyint: ties to even, like Python's round
+    return round(x)  # nearbyint: ties to even, like Python's round
 
 
 def _is_near_int(value: float) -> tuple[bool, int]:
@@ -343,10 +348,8 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin):
                     setattr(self, attr, 0)
         value = ini.find("RS274NGC", "ORIENT_OFFSET")
         if value is not None:
-            try:
+            with contextlib.suppress(ValueError):
                 self.orient_offset = float(value)
-            except ValueError:
-                pass
         self.use_lazy_close = True
         base = os.path.dirname(os.path.abspath(getattr(ini, "path", "."))) or "."
         prefix = ini.find("DISPLAY", "PROGRAM_PREFIX")
@@ -581,9 +584,8 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin):
         if status == INTERP_OK:
             if self.line_length != 0:
                 self.parse_line(self.blocktext, block)
-        elif status == INTERP_ENDFILE:
-            if self.skipping_o:
-                raise InterpError(f"Failed to find sub 'O{self.skipping_o}' before EOF")
+        elif status == INTERP_ENDFILE and self.skipping_o:
+            raise InterpError(f"Failed to find sub 'O{self.skipping_o}' before EOF")
         return status
 
     def read_text(self, command: str | None) -> int:
@@ -947,7 +949,24 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin):
         return INTERP_OK
 
     def convert_param_comment(self, comment: str) -> str:
-        out = []
+        """Expand #n, #<name> and %d/%f/%.Nf in (DEBUG,) (PRINT,) (LOG,) (ABORT,) text.
+
+        LinuxCNC ignores an expansion error and uses its buffer as it stands: the text
+        expanded so far followed by the rest of the previous expansion; so do we.
+        """
+        out: list[str] = []
+        try:
+            self._expand_param_comment(comment, out)
+        except InterpError:
+            done = "".join(out)
+            self._last_expansion = done + self._last_expansion[len(done):]
+            return self._last_expansion
+        self._last_expansion = "".join(out)
+        return self._last_expansion
+
+    _last_expansion = ""
+
+    def _expand_param_comment(self, comment: str, out: list[str]) -> None:
         fmt = "%lf"
         i = 0
         n = len(comment)
@@ -1020,7 +1039,6 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin):
             else:
                 out.append(ch)
                 i += 1
-        return "".join(out)
 
     # ========================================================= mode changes
     def convert_spindle_mode(self, dollar: int, block: Block) -> None:
@@ -1196,9 +1214,9 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin):
                 (canon.ENABLE_FEED_HOLD if on else canon.DISABLE_FEED_HOLD)()
                 self.feed_hold = on
         m10 = block.m_modes[10]
-        if m10 != -1:
-            if not canon.USER_DEFINED_FUNCTION(m10, block.p_number, block.q_number):
-                raise InterpError(f"Unknown m code used: M{m10}")
+        if m10 != -1 and not canon.USER_DEFINED_FUNCTION(m10, block.p_number,
+                                                         block.q_number):
+            raise InterpError(f"Unknown m code used: M{m10}")
 
     def convert_m66(self, block: Block) -> None:
         if block.p_flag and block.e_flag:
@@ -1237,8 +1255,95 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin):
                 self.input_index = _round_to_int(block.e_number)
                 self.input_digital = False
 
+    # ======================================================== M70..M73
     def convert_context(self, m7: int) -> None:
-        raise InterpError(f"M{m7} is not supported by this interpreter")
+        frame = self.sub_context[self.call_level]
+        if m7 in (70, 73):
+            self.save_settings()
+            frame.context_status |= CONTEXT_VALID
+            if m7 == 73 and self.call_level > 0:
+                frame.context_status |= CONTEXT_RESTORE_ON_RETURN
+        elif m7 == 71:
+            frame.context_status &= ~CONTEXT_VALID
+        else:
+            if not frame.context_status & CONTEXT_VALID:
+                raise InterpError(
+                    "Cannot restore context from invalid stack frame - missing M70/M73?")
+            self.restore_settings(self.call_level)
+
+    def active_g_codes(self) -> list[int]:
+        plane = {C.PLANE_XY: G_17, C.PLANE_XZ: G_18, C.PLANE_YZ: G_19, C.PLANE_UV: G_17_1,
+                 C.PLANE_UW: G_18_1, C.PLANE_VW: G_19_1}.get(self.plane, 0)
+        o = self.origin_index
+        return [
+            self.sequence_number, self.motion_mode, -1, plane,
+            G_42 if self.cutter_comp_side == RIGHT else G_41 if self.cutter_comp_side == LEFT
+            else G_40,
+            G_20 if self.length_units == C.UNITS_INCHES else G_21,
+            G_90 if self.distance_mode == MODE_ABSOLUTE else G_91,
+            G_93 if self.feed_mode == INVERSE_TIME else G_94
+            if self.feed_mode == UNITS_PER_MINUTE else G_95,
+            530 + 10 * o if o < 7 else 584 + o,
+            G_43 if any(self.tool_offset) else G_49,
+            G_98 if self.retract_mode == OLD_Z else G_99,
+            G_64 if self.control_mode == C.CONTINUOUS else G_61
+            if self.control_mode == C.EXACT_PATH else G_61_1,
+            -1,
+            G_97 if self.spindle_mode[0] == CONSTANT_RPM else G_96,
+            G_90_1 if self.ijk_distance_mode == MODE_ABSOLUTE else G_91_1,
+            G_7 if self.lathe_diameter_mode else G_8,
+            G_92_3 if self.parameters[5210] else G_92_2,
+        ]
+
+    def active_m_codes(self) -> list[int]:
+        turning = self.spindle_turning[0]
+        return [
+            self.sequence_number, -1,
+            5 if turning == C.STOPPED else 3 if turning == C.CLOCKWISE else 4,
+            -1,
+            7 if self.mist else -1 if self.flood else 9,
+            8 if self.flood else -1,
+            48 if self.feed_override else 51,  # LinuxCNC tests the array, always true
+            52 if self.adaptive_feed else -1,
+            53 if self.feed_hold else -1,
+            0,
+        ]
+
+    def active_settings(self) -> list[float]:
+        return [float(self.sequence_number), self.feed_rate, self.speed[0], self.tolerance,
+                self.naivecam_tolerance]
+
+    def save_settings(self) -> None:
+        frame = self.sub_context[self.call_level]
+        frame.saved_g_codes = self.active_g_codes()
+        frame.saved_m_codes = self.active_m_codes()
+        frame.saved_settings = self.active_settings()
+
+    def restore_settings(self, from_level: int) -> None:
+        frame = self.sub_context[from_level]
+        current_g = self.active_g_codes()
+        if current_g[5] != frame.saved_g_codes[5]:
+            self._execute_restore(f"G{frame.saved_g_codes[5] // 10}",
+                                  "M7x: restore_settings G20/G21 failed: ''")
+            current_g = self.active_g_codes()
+        cmd = _gen_settings(current_g, frame.saved_g_codes, self.active_settings(),
+                            frame.saved_settings)
+        cmd += _gen_m_codes(self.active_m_codes(), frame.saved_m_codes)
+        for part in cmd.split("\n"):
+            if part:
+                self._execute_restore(part, None)
+
+    def _execute_restore(self, command: str, message: str | None) -> None:
+        try:
+            status = self.execute(command)
+        except InterpError as error:
+            if message is not None:
+                raise InterpError(message) from None
+            raise InterpError(
+                f"M7x: restore_settings failed executing: '{command}': {error.message}"
+            ) from None
+        if status != INTERP_OK and message is not None:
+            raise InterpError(message)
 
     # ============================================================== G codes
     def convert_g(self, block: Block) -> None:
@@ -1283,10 +1388,8 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin):
         if g[GM_MODAL_0] != -1:
             self.convert_modal_0(g[GM_MODAL_0], block)
         if g[GM_G92_IS_APPLIED] != -1:
-            try:
+            with contextlib.suppress(InterpError):  # LinuxCNC ignores this status
                 self.convert_axis_offsets(g[GM_G92_IS_APPLIED], block)
-            except InterpError:
-                pass  # LinuxCNC ignores this status
         if block.motion_to_be != -1:
             self.convert_motion(block.motion_to_be, block)
 
@@ -1916,9 +2019,9 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin):
         if half_length / abs_radius > 1 - TINY:
             half_length = abs_radius
         if (move == G_2 and radius > 0) or (move == G_3 and radius < 0):
-            theta = math.atan2(ey - cy, ex - cx) - math.pi / 2
+            theta = ldmath.minus_pi_2(math.atan2(ey - cy, ex - cx))
         else:
-            theta = math.atan2(ey - cy, ex - cx) + math.pi / 2
+            theta = ldmath.plus_pi_2(math.atan2(ey - cy, ex - cx))
         turn2 = math.asin(half_length / abs_radius)
         offset = abs_radius * math.cos(turn2)
         center_x = mid_x + offset * math.cos(theta)
@@ -1930,7 +2033,6 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin):
     def find_ends(self, block: Block) -> list[float]:
         cur = self.current
         if block.g_modes[GM_MODAL_0] == G_53:
-            self.canon.COMMENT("interpreter: offsets temporarily suspended")
             if block.radius_flag or block.theta_flag:
                 raise InterpError("Cannot use polar coordinates with G53")
             off, org, tlo = self.axis_offset, self.origin_offset, self.tool_offset
@@ -2427,6 +2529,54 @@ class _ToolTableView:
         self._entries[idx] = entry.copy()
 
 
+CONTEXT_VALID, CONTEXT_RESTORE_ON_RETURN = 1, 2
+
+
+def _gen_settings(current_g, saved_g, current_f, saved_f) -> str:
+    """The G-code text that brings the modal state back to a saved one (M72, M73)."""
+    cmd = []
+    g64_changed = False
+    for i in range(5):
+        if saved_f[i] != current_f[i]:
+            if i == 1:
+                cmd.append(f" F{saved_f[i]:.1f}")
+            elif i == 2:
+                cmd.append(f" S{saved_f[i]:.0f}")
+            elif i in (3, 4):
+                g64_changed = True
+    for i in range(17):
+        val = saved_g[i]
+        if val == current_g[i]:
+            continue
+        if i in (3, 4, 6, 7, 8, 9, 10, 13, 14, 15, 16):
+            if val != -1:
+                cmd.append(f" G{val // 10}.{val % 10}" if val % 10 else f" G{val // 10}")
+        elif i == 11:
+            if val == G_64:
+                g64_changed = True
+            elif val == G_61:
+                cmd.append(" G61")
+            elif val == G_61_1:
+                cmd.append(" G61.1")
+    if saved_g[11] == G_64 and g64_changed:
+        if saved_f[3] < 0:
+            cmd.append(" G64")
+        elif saved_f[4] < 0:
+            cmd.append(f" G64 P{saved_f[3]:f}")
+        else:
+            cmd.append(f" G64 P{saved_f[3]:f} Q{saved_f[4]:f}")
+    return "".join(cmd)
+
+
+def _gen_m_codes(current, saved) -> str:
+    cmd = []
+    for i in range(10):
+        val = saved[i]
+        if val != current[i] and i in (2, 4, 5, 6, 7, 8) and val != -1:
+            cmd.append(f"M{val}\n")
+    return "".join(cmd)
+
+
 def _axis_words(block: Block) -> list[float | None]:
     return [block.x_number if block.x_flag else None, block.y_number if block.y_flag else None,
             block.z_number if block.z_flag else None, block.a_number if block.a_flag else None,
@@ -2477,7 +2627,7 @@ def _arc_length(x1, y1, z1, cx, cy, turn, x2, y2, z2) -> float:
 
 def _c_format(fmt: str, value: float) -> str:
     if fmt == "%lf":
-        return "%f" % value
+        return f"{value:f}"
     return fmt % value
 
 
@@ -2489,5 +2639,17 @@ def _realpath(path: str, base: str) -> str:
     return real if os.path.exists(real) else ""
 
 
-__all__ = ["O_none", "G_54", "G_81", "G_82", "G_84", "G_86", "G_87", "G_88", "G_89",
-           "CT_NONE", "Interpreter", "rotate"]
+__all__ = [
+    "CT_NONE",
+    "G_54",
+    "G_81",
+    "G_82",
+    "G_84",
+    "G_86",
+    "G_87",
+    "G_88",
+    "G_89",
+    "Interpreter",
+    "O_none",
+    "rotate",
+]

@@ -17,8 +17,8 @@ from .block import (
     CT_NONE,
     M_98,
     M_99,
-    O_OPS,
     O_,
+    O_OPS,
     Block,
     O_break,
     O_call,
@@ -45,8 +45,20 @@ INTERP_SUB_ROUTINE_LEVELS = 10
 class Context:
     """One call frame (LinuxCNC's ``context``)."""
 
-    __slots__ = ("position", "sequence_number", "filename", "subName", "m98_loop_counter",
-                 "context_status", "call_type", "saved_params", "named_params")
+    __slots__ = (
+        "call_type",
+        "context_status",
+        "filename",
+        "m98_loop_counter",
+        "named_params",
+        "position",
+        "saved_g_codes",
+        "saved_m_codes",
+        "saved_params",
+        "saved_settings",
+        "sequence_number",
+        "subName",
+    )
 
     def __init__(self) -> None:
         self.clear()
@@ -61,10 +73,13 @@ class Context:
         self.call_type = CT_NONE
         self.saved_params = [0.0] * 30
         self.named_params: dict[str, list] = {}
+        self.saved_g_codes = [0] * 17
+        self.saved_m_codes = [0] * 10
+        self.saved_settings = [0.0] * 5
 
 
 class _Offset:
-    __slots__ = ("type", "offset", "filename", "repeat_count", "sequence_number")
+    __slots__ = ("filename", "offset", "repeat_count", "sequence_number", "type")
 
     def __init__(self, otype: int, offset: int, filename: str, sequence_number: int) -> None:
         self.type = otype
@@ -113,13 +128,15 @@ class OWordMixin:
         frame.subName = block.o_name
         frame.call_type = block.call_type
 
-    def leave_context(self) -> None:
+    def leave_context(self, restore: bool = False) -> None:
         leaving = self.sub_context[self.call_level]
         if self.call_level < 1:
             raise InterpError("Bug: call stack underrun")
         leaving.named_params.clear()
         leaving.subName = None
         self.call_level -= 1
+        if restore and (leaving.context_status & 3) == 3:  # M73: restore on return
+            self.restore_settings(self.call_level + 1)
 
     def execute_call(self, frame: Context, call_type: int) -> None:
         previous = self.sub_context[self.call_level - 1]
@@ -177,7 +194,7 @@ class OWordMixin:
                     self.filename = previous.filename
                 self.file_pos = previous.position
                 self.sequence_number = previous.sequence_number
-            self.leave_context()
+            self.leave_context(restore=True)
             self.sub_name = previous.subName if previous.subName else None
         elif block.o_type == O_endsub:
             if self.defining_sub != 1:

@@ -11,6 +11,7 @@ predefined ``#<_...>`` ones are read-only and computed from the interpreter stat
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 
@@ -135,10 +136,8 @@ class ParamsMixin:
         for i in range(k, MAX_PARAMETERS):
             if i in _REQUIRED_SET:
                 out.append(f"{i}\t{pars[i]:f}\n")
-        try:
+        with contextlib.suppress(OSError):  # rs274 says nothing when it cannot write it
             atomic_write_text(filename, "".join(out), keep_backup=True)
-        except OSError:
-            pass  # rs274 reports nothing when the file cannot be written
 
     # -------------------------------------------------------- named params
     def init_named_parameters(self) -> None:
@@ -169,12 +168,8 @@ class ParamsMixin:
                     self.sub_context[0].named_params[name] = [
                         value, PA_GLOBAL | PA_READONLY | PA_FROM_INI]
                     return True, value
-            if self.feature_hal_pin_vars and lower.startswith("_hal["):
-                close = name.find("]", 5)
-                if len(name) > 6 and close >= 0:
-                    if close + 1 < len(name):
-                        raise InterpError(f"{name}: trailing garbage after closing bracket")
-                    raise InterpError(f"Named hal parameter #<{name}> not found")
+            # #<_hal[...]>: the standalone interpreter has no HAL, so the lookup fails
+            # quietly and the parameter counts as undefined, as in rs274
             return False, 0.0
         if entry[1] & PA_USE_LOOKUP:
             return True, self.lookup_named_param(name)
@@ -188,17 +183,14 @@ class ParamsMixin:
         section = cap[5:close]
         key = cap[close + 1:]
         value = self.ini.find(section, key)
+        # a missing or non-numeric entry makes the parameter undefined: LinuxCNC's lookup
+        # reports an error that its caller drops
         if value is None:
-            path = getattr(self.ini, "path", "")
-            raise InterpError(
-                f"Named INI parameter #<{name}> not found in INI file '{path}': error=0x1")
+            return None
         try:
             return float(value.split()[0])
         except (ValueError, IndexError):
-            path = getattr(self.ini, "path", "")
-            raise InterpError(
-                f"Named INI parameter #<{name}> not found in INI file '{path}': error=0x2"
-            ) from None
+            return None
 
     def add_named_param(self, name: str, attr: int = 0) -> None:
         exists, _ = self.find_named_param(name)

@@ -10,10 +10,17 @@ from __future__ import annotations
 import math
 import re
 
-from .block import EMS, GEES, G_80, M_98, M_99, Block, O_
+from . import ldmath
 from .block import (
     CT_NGC_M98_SUB,
     CT_NGC_OWORD_SUB,
+    EMS,
+    G_80,
+    GEES,
+    M_98,
+    M_99,
+    O_,
+    Block,
     O_break,
     O_call,
     O_continue,
@@ -704,7 +711,7 @@ class ReaderMixin:
             if counter >= len(line) or line[counter] != "[":
                 raise InterpError("Left bracket missing after slash with atan")
             argument2, counter = self.read_real_expression(line, counter)
-            return math.atan2(value, argument2) * 180.0 / math.pi, counter
+            return ldmath.rad_to_deg(math.atan2(value, argument2)), counter
         return _execute_unary(value, operation), counter
 
 
@@ -778,13 +785,13 @@ def _execute_unary(value: float, operation: str) -> float:
     if operation == "acos":
         if value < -1.0 or value > 1.0:
             raise InterpError("Argument to acos out of range")
-        return math.acos(value) * 180.0 / math.pi
+        return ldmath.rad_to_deg(math.acos(value))
     if operation == "asin":
         if value < -1.0 or value > 1.0:
             raise InterpError("Argument to asin out of range")
-        return math.asin(value) * 180.0 / math.pi
+        return ldmath.rad_to_deg(math.asin(value))
     if operation == "cos":
-        return math.cos(value * math.pi / 180.0)
+        return ldmath.cos_deg(value)
     if operation == "exp":
         try:
             return math.exp(value)
@@ -801,13 +808,13 @@ def _execute_unary(value: float, operation: str) -> float:
     if operation == "round":
         return float(_to_c_int(value + (-0.5 if value < 0.0 else 0.5)))
     if operation == "sin":
-        return math.sin(value * math.pi / 180.0)
+        return ldmath.sin_deg(value)
     if operation == "sqrt":
         if value < 0.0:
             raise InterpError("Negative argument to sqrt")
         return math.sqrt(value)
     if operation == "tan":
-        return math.tan(value * math.pi / 180.0)
+        return ldmath.tan_deg(value)
     raise InterpError("Bug unknown operation")
 
 
