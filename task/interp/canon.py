@@ -266,12 +266,25 @@ class PrintingCanon:
         self.emit(f"SET_TRAVERSE_RATE({rate:.4f})")
         self.traverse_rate = rate
 
+    # the two calls of nearly every line print inline (emit() unrolled) for speed
     def STRAIGHT_TRAVERSE(self, line, x, y, z, a, b, c, u=0.0, v=0.0, w=0.0) -> None:
-        self.emit(f"STRAIGHT_TRAVERSE({x:.4f}, {y:.4f}, {z:.4f}, {a:.4f}, {b:.4f}, {c:.4f})")
+        text = self.linetext()
+        if text is not self._last_text:
+            self._last_text = text
+            self._last_prefix = _nline(text)
+        self.write(f"{self.counter:5d} {self._last_prefix}STRAIGHT_TRAVERSE({x:.4f}, {y:.4f}, "
+                   f"{z:.4f}, {a:.4f}, {b:.4f}, {c:.4f})\n")
+        self.counter += 1
         self.position = [x, y, z, a, b, c]
 
     def STRAIGHT_FEED(self, line, x, y, z, a, b, c, u=0.0, v=0.0, w=0.0) -> None:
-        self.emit(f"STRAIGHT_FEED({x:.4f}, {y:.4f}, {z:.4f}, {a:.4f}, {b:.4f}, {c:.4f})")
+        text = self.linetext()
+        if text is not self._last_text:
+            self._last_text = text
+            self._last_prefix = _nline(text)
+        self.write(f"{self.counter:5d} {self._last_prefix}STRAIGHT_FEED({x:.4f}, {y:.4f}, "
+                   f"{z:.4f}, {a:.4f}, {b:.4f}, {c:.4f})\n")
+        self.counter += 1
         self.position = [x, y, z, a, b, c]
 
     def ARC_FEED(self, line, first_end, second_end, first_axis, second_axis, rotation,

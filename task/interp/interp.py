@@ -14,6 +14,7 @@ from __future__ import annotations
 import contextlib
 import math
 import os
+import re
 
 from . import canon as C  # noqa: N812  (C.PLANE_XY reads like CANON_PLANE_XY)
 from . import ldmath
@@ -128,7 +129,7 @@ from .errors import (
 )
 from .owords import Context, OWordMixin
 from .params import ParamsMixin
-from .reader import LINELEN, ReaderMixin, close_and_downcase
+from .reader import _DOWNCASE, LINELEN, ReaderMixin, close_and_downcase
 
 MM_PER_INCH = 25.4
 INCH_PER_MM = 1.0 / 25.4
@@ -189,6 +190,7 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin):
         self.use_lazy_close = False
         self.lazy_closing = False
         self.qc: list = []  # cutter compensation queue (unused while compensation is off)
+        self._fast = None  # a line taken by the fast path: (motion, words, n)
         self._file_cache: dict[str, list[str]] = {}
 
     def _get_linetext(self) -> str:
@@ -442,6 +444,11 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin):
 
     def read_inputs(self) -> None:
         canon = self.canon
+        pars = self.parameters
+        pars[5600] = canon.GET_EXTERNAL_TC_FAULT()
+        pars[5601] = canon.GET_EXTERNAL_TC_REASON()
+        if not (self.probe_flag or self.toolchange_flag or self.input_flag):
+            return
         if self.probe_flag:
             self.set_probe_data()
             self.probe_flag = False
@@ -449,8 +456,6 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin):
             self.refresh_actual_position()
             self.load_tool_table()
             self.toolchange_flag = False
-        self.parameters[5600] = canon.GET_EXTERNAL_TC_FAULT()
-        self.parameters[5601] = canon.GET_EXTERNAL_TC_REASON()
         if self.input_flag:
             if self.input_digital:
                 self.parameters[5399] = canon.GET_EXTERNAL_DIGITAL_INPUT(
@@ -568,22 +573,26 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin):
         self.read_inputs()
         if command is None and self.file_lines is None:
             return INTERP_FILE_NOT_OPEN
-        pars = self.parameters
-        cur = self.current
-        pars[5420:5429] = cur
-        block = Block()
-        self.block = block
-        if self.file_lines is not None:
-            block.offset = self.file_pos
+        self.parameters[5420:5429] = self.current
+        offset = self.file_pos
         try:
             status = self.read_text(command)
         except InterpError:
+            self.block = _EMPTY_BLOCK
             if self.skipping_to_sub:
                 self.skipping_to_sub = None
             raise
         if status == INTERP_OK:
             if self.line_length != 0:
+                match = _FAST_LINE.match(self.blocktext)
+                if match is not None and self._fast_read(match):
+                    return INTERP_OK
+                block = Block()
+                block.offset = offset
+                self.block = block
                 self.parse_line(self.blocktext, block)
+            else:
+                self.block = _EMPTY_BLOCK
         elif status == INTERP_ENDFILE and self.skipping_o:
             raise InterpError(f"Failed to find sub 'O{self.skipping_o}' before EOF")
         return status
@@ -611,7 +620,10 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin):
                 raise InterpError("Command too long")
             raw = raw.rstrip(" \t\n\r\f\v")
             self.linetext = raw
-            line = close_and_downcase(raw)
+            if "(" in raw or ";" in raw or "\n" in raw:
+                line = close_and_downcase(raw)
+            else:
+                line = raw.translate(_DOWNCASE)
             if line == "%" and self.percent_flag:
                 self.canon.FINISH()
                 return INTERP_ENDFILE
@@ -626,6 +638,55 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin):
             self.line_length = 0
         else:
             self.line_length = len(line)
+        return INTERP_OK
+
+    # --------------------------------------------------------------- fast path
+    def _fast_read(self, match) -> bool:
+        """Take a plain ``[Nn] [G0|G1] X.. Y.. Z..`` line without building a Block.
+
+        Only lines whose outcome is certain go this way (no error possible, no special
+        state); everything else takes the general path, so the result is the same.
+        """
+        if self.skipping_o or self.cutter_comp_side or self.lathe_diameter_mode:
+            return False
+        g = match.group(2)
+        if g is None:
+            move = self.motion_mode
+            if move != G_0 and move != G_1:
+                return False
+        else:
+            move = G_1 if g == "1" else G_0
+        if move == G_1 and (self.feed_mode != UNITS_PER_MINUTE or self.feed_rate == 0.0):
+            return False
+        words = match.groups()[2:]
+        if (words[3] is not None or words[4] is not None or words[5] is not None) and (
+                self.a_axis_wrapped or self.b_axis_wrapped or self.c_axis_wrapped
+                or self.a_indexer_jnum != -1 or self.b_indexer_jnum != -1
+                or self.c_indexer_jnum != -1):
+            return False
+        ends = list(self.current)
+        if self.distance_mode == MODE_ABSOLUTE:
+            for k, text in enumerate(words):
+                if text is not None:
+                    ends[k] = float(text)
+        else:
+            for k, text in enumerate(words):
+                if text is not None:
+                    ends[k] += float(text)
+        self._fast = (move, ends)
+        return True
+
+    def _fast_execute(self) -> int:
+        move, ends = self._fast
+        self._fast = None
+        self.cycle_il_flag = False
+        self.arc_not_allowed = False
+        self.motion_mode = move
+        if move == G_0:
+            self.canon.STRAIGHT_TRAVERSE(self.sequence_number, *ends)
+        else:
+            self.canon.STRAIGHT_FEED(self.sequence_number, *ends)
+        self.current = ends
         return INTERP_OK
 
     def parse_line(self, line: str, block: Block) -> None:
@@ -649,6 +710,8 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin):
             status = self.read(command)
             if status != INTERP_OK:
                 return status
+        if self._fast is not None:
+            return self._fast_execute()
         block = self.block
         if block.o_name is not None or self.mdi_interrupt:
             status = self.convert_control_functions(block)
@@ -2509,6 +2572,17 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin):
             self._set_tool_params_from(spindle)
         elif self.tool_table[0].toolno == -1:
             self.default_tool_parameters()
+
+
+# A line of nothing but an optional N word, an optional G0/G1 and plain-number axis words in
+# XYZABC order (other lines take the general path).
+_NUM = r"([-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+))"
+_FAST_LINE = re.compile(
+    r"(?:n(\d+))?(?:g0*([01])(?![0-9.]))?(?=[xyzabc])" + "".join(
+        f"(?:{letter}{_NUM})?" for letter in "xyzabc") + r"\Z")
+
+
+_EMPTY_BLOCK = Block()  # stands for blank lines; never executed
 
 
 class _ToolTableView:

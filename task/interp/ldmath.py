@@ -9,41 +9,50 @@ long double steps exactly.
 
 from __future__ import annotations
 
-import numpy as np
+from functools import cache
 
-_LD = np.longdouble
-PI_LD = _LD(0xC90FDAA22168C235) * _LD(2.0) ** -62  # M_PIl
-PI_2_LD = PI_LD / _LD(2.0)  # M_PI_2l
-_180 = _LD(180.0)
+
+@cache
+def _np():
+    """numpy and the long double constants, imported on first use (keeps start-up fast)."""
+    import numpy as np
+
+    ld = np.longdouble
+    pi_ld = ld(0xC90FDAA22168C235) * ld(2.0) ** -62  # M_PIl
+    return np, ld, pi_ld, pi_ld / ld(2.0), ld(180.0)
 
 
 def _radians(degrees: float):
-    return _LD(degrees) * PI_LD / _180
+    _, ld, pi_ld, _, ld180 = _np()
+    return ld(degrees) * pi_ld / ld180
 
 
 def sin_deg(degrees: float) -> float:
     """``sin((x * M_PIl) / 180.0)`` with C++'s long double overload."""
-    return float(np.sin(_radians(degrees)))
+    return float(_np()[0].sin(_radians(degrees)))
 
 
 def cos_deg(degrees: float) -> float:
-    return float(np.cos(_radians(degrees)))
+    return float(_np()[0].cos(_radians(degrees)))
 
 
 def tan_deg(degrees: float) -> float:
-    return float(np.tan(_radians(degrees)))
+    return float(_np()[0].tan(_radians(degrees)))
 
 
 def rad_to_deg(radians: float) -> float:
     """``(double)((radians * 180.0) / M_PIl)``"""
-    return float(_LD(radians) * _180 / PI_LD)
+    _, ld, pi_ld, _, ld180 = _np()
+    return float(ld(radians) * ld180 / pi_ld)
 
 
 def minus_pi_2(value: float) -> float:
     """``(double)(value - M_PI_2l)``"""
-    return float(_LD(value) - PI_2_LD)
+    _, ld, _, pi_2, _ = _np()
+    return float(ld(value) - pi_2)
 
 
 def plus_pi_2(value: float) -> float:
     """``(double)(value + M_PI_2l)``"""
-    return float(_LD(value) + PI_2_LD)
+    _, ld, _, pi_2, _ = _np()
+    return float(ld(value) + pi_2)
