@@ -86,7 +86,7 @@ def list_buffers(config: NmlConfig) -> str:
         rows.append(
             (
                 buffer.name,
-                "queue" if buffer.is_queue else "latest",
+                "broadcast" if buffer.is_broadcast else "queue" if buffer.is_queue else "latest",
                 str(buffer.size),
                 encoding.name.lower(),
                 str(largest) if largest else "-",

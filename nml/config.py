@@ -29,7 +29,17 @@ OPS = {"R", "W", "RW"}
 DEFAULT_BUFFER = "default"
 
 _NETWORK_OPTIONS = ("TCP=", "UDP=", "STCP=")
-_FLAG_OPTIONS = {"queue", "confirm_write", "xdr", "ascii", "disp", "diag", "serial", "packed"}
+_FLAG_OPTIONS = {
+    "broadcast",
+    "queue",
+    "confirm_write",
+    "xdr",
+    "ascii",
+    "disp",
+    "diag",
+    "serial",
+    "packed",
+}
 _OBSOLETE_MUTEX = {"none", "no_interrupts", "no_switching"}
 
 
@@ -48,6 +58,7 @@ class BufferConfig:
     max_procs: int
     key: int
     is_queue: bool = False
+    is_broadcast: bool = False
     mutex: str = "os_sem"
     options: tuple[str, ...] = ()
     file: str = "<string>"
@@ -198,6 +209,10 @@ def _parse_buffer(
         is_valid = False
     options = tuple(fields[9:])
     is_queue, mutex = _buffer_options(name, options, where, errors, notes)
+    is_broadcast = "broadcast" in options
+    if is_broadcast and not is_queue:
+        errors.append(f"{where}: buffer {name}: broadcast needs the queue option")
+        is_valid = False
     if not is_valid:
         return None
     return BufferConfig(
@@ -210,6 +225,7 @@ def _parse_buffer(
         max_procs=numbers["max_procs"],
         key=numbers["key"],
         is_queue=is_queue,
+        is_broadcast=is_broadcast,
         mutex=mutex,
         options=options,
         file=path,

@@ -48,7 +48,7 @@ from nml.message import RCS_CMD_MSG, NMLmsg
 log = logging.getLogger("nml")
 
 MAGIC = 0x314C4D4E  # "NML1"
-LAYOUT_VERSION = 2
+LAYOUT_VERSION = 3
 KIND_LATEST, KIND_QUEUE = 0, 1
 WRAP = 0xFFFFFFFF
 _LOCK_SLICE_S = 0.2  # how often a waiter for the mutex checks that its holder is alive
@@ -75,8 +75,16 @@ _HEADER_FIELDS = {
     "next_serial": (112, "<Q"),
 }
 HEADER_SIZE = 128
-SLOT = struct.Struct("<iiII")  # pid, c_num, is_waiting, reserved
-RECORD = struct.Struct("<II")  # queue record: length, reserved
+# Connection slot fields: name -> (offset in the slot, struct format).
+_SLOT_FIELDS = {
+    "pid": (0, "<i"),
+    "c_num": (4, "<i"),
+    "is_waiting": (8, "<I"),  # sleeping on its wake semaphore
+    "is_reader": (12, "<I"),  # holds broadcast messages until it has read them
+    "cursor": (16, "<Q"),  # broadcast: sequence number of the last message it read
+}
+SLOT_SIZE = 24
+RECORD = struct.Struct("<IIQ")  # queue record: length, reserved, sequence number
 _U64 = struct.Struct("<Q")
 _IDENTITY = struct.Struct("<II")  # magic, version at offset 0
 _LATEST_STATE = struct.Struct("<QQQ")  # seq, write_count, latest_len: read in one go
@@ -112,7 +120,7 @@ class BufferLayout:
 
     @property
     def data_offset(self) -> int:
-        return _align8(HEADER_SIZE + SLOT.size * self.max_procs)
+        return _align8(HEADER_SIZE + SLOT_SIZE * self.max_procs)
 
     @property
     def capacity(self) -> int:
@@ -142,6 +150,7 @@ class ShmBuffer:
         self.layout = BufferLayout(buffer.size, buffer.max_procs)
         self.encoding = Encoding.from_neut(buffer.is_neutral)
         self.is_queue = buffer.is_queue
+        self.is_broadcast = buffer.is_broadcast
         self.is_master = process.is_master
         self.timeout = process.timeout
         self._shm_name = ipc_name("shm", buffer.name)
@@ -285,7 +294,7 @@ class ShmBuffer:
             with contextlib.suppress(NmlTimeoutError, ValueError):
                 self._lock(timeout=1.0)
                 try:
-                    SLOT.pack_into(self._mm, self._slot_offset(self._slot), 0, 0, 0, 0)
+                    self._slot_clear(self._slot)
                 finally:
                     self._unlock()
         self._release_resources(is_unlinking=self.is_master)
@@ -325,7 +334,19 @@ class ShmBuffer:
         struct.pack_into(fmt, self._mm, offset, value)  # type: ignore[arg-type]
 
     def _slot_offset(self, index: int) -> int:
-        return self.layout.slots_offset + index * SLOT.size
+        return self.layout.slots_offset + index * SLOT_SIZE
+
+    def _slot_get(self, index: int, key: str) -> int:
+        offset, fmt = _SLOT_FIELDS[key]
+        return struct.unpack_from(fmt, self._mm, self._slot_offset(index) + offset)[0]  # type: ignore[arg-type]
+
+    def _slot_put(self, index: int, key: str, value: int) -> None:
+        offset, fmt = _SLOT_FIELDS[key]
+        struct.pack_into(fmt, self._mm, self._slot_offset(index) + offset, value)  # type: ignore[arg-type]
+
+    def _slot_clear(self, index: int) -> None:
+        start = self._slot_offset(index)
+        self._mm[start : start + SLOT_SIZE] = bytes(SLOT_SIZE)  # type: ignore[index]
 
     def _wake_name(self, index: int) -> str:
         return ipc_name("wake", f"{self.name}.{index}")
@@ -344,12 +365,12 @@ class ShmBuffer:
         try:
             free, live = -1, []
             for index in range(self.config.max_procs):
-                pid = SLOT.unpack_from(self._mm, self._slot_offset(index))[0]
+                pid = self._slot_get(index, "pid")
                 if pid and not is_process_alive(pid):
                     log.warning(
                         "buffer %s: freeing the slot of pid %d, which died attached", self.name, pid
                     )
-                    SLOT.pack_into(self._mm, self._slot_offset(index), 0, 0, 0, 0)
+                    self._slot_clear(index)
                     pid = 0
                 if pid:
                     live.append(pid)
@@ -360,8 +381,12 @@ class ShmBuffer:
                     f"buffer {self.name}: already {self.config.max_procs} connections (max_procs), "
                     f"pids {', '.join(map(str, live))}; process {self.process.name} refused"
                 )
-            SLOT.pack_into(self._mm, self._slot_offset(free), os.getpid(), self.process.c_num, 0, 0)
+            self._slot_clear(free)
+            self._slot_put(free, "pid", os.getpid())
+            self._slot_put(free, "c_num", self.process.c_num)
             self._slot = free
+            if self.is_broadcast and self.process.can_read:
+                self._register_broadcast_reader()
         finally:
             self._unlock()
         sem = self._wake_sem(free)
@@ -374,9 +399,9 @@ class ShmBuffer:
         self._require_open()
         found = []
         for index in range(self.config.max_procs):
-            pid, c_num, _, _ = SLOT.unpack_from(self._mm, self._slot_offset(index))
+            pid = self._slot_get(index, "pid")
             if pid:
-                found.append((pid, c_num))
+                found.append((pid, self._slot_get(index, "c_num")))
         return found
 
     # ------------------------------------------------------------------ mutex
@@ -435,10 +460,8 @@ class ShmBuffer:
     def _wake_waiters(self) -> None:
         """Post every slot marked waiting (called with the mutex held)."""
         for index in range(self.config.max_procs):
-            offset = self._slot_offset(index)
-            pid, c_num, is_waiting, _ = SLOT.unpack_from(self._mm, offset)
-            if is_waiting:
-                SLOT.pack_into(self._mm, offset, pid, c_num, 0, 0)
+            if self._slot_get(index, "is_waiting"):
+                self._slot_put(index, "is_waiting", 0)
                 self._wake_sem(index).release()
 
     def _wait_for_change(self, is_ready, deadline: float | None) -> bool:  # type: ignore[no-untyped-def]
@@ -446,7 +469,6 @@ class ShmBuffer:
         if self._slot < 0:
             raise NmlAccessError(f"buffer {self.name}: an observer cannot wait for messages")
         sem = self._wake_sem(self._slot)
-        offset = self._slot_offset(self._slot)
         while True:
             self._lock()
             try:
@@ -454,7 +476,7 @@ class ShmBuffer:
                     return True
                 while _try_acquire(sem):
                     pass
-                SLOT.pack_into(self._mm, offset, os.getpid(), self.process.c_num, 1, 0)
+                self._slot_put(self._slot, "is_waiting", 1)
             finally:
                 self._unlock()
             remaining = None if deadline is None else deadline - time.monotonic()
@@ -462,7 +484,7 @@ class ShmBuffer:
                 return False
             woke = _try_acquire(sem, remaining)
             if not woke:
-                SLOT.pack_into(self._mm, offset, os.getpid(), self.process.c_num, 0, 0)
+                self._slot_put(self._slot, "is_waiting", 0)
                 return is_ready()
 
     # ------------------------------------------------------------------ write
@@ -496,6 +518,8 @@ class ShmBuffer:
                 msg.serial_number = serial
                 data = encode(msg, self.encoding)
             if self.is_queue:
+                if self.is_broadcast:
+                    self._trim_broadcast()
                 while not self._queue_has_room(len(data)):
                     self._unlock()
                     if not self._wait_for_change(lambda: self._queue_has_room(len(data)), deadline):
@@ -542,15 +566,16 @@ class ShmBuffer:
         else:
             head, tail, used = self._get("head"), self._get("tail"), self._get("used")
         if tail >= head and capacity - tail < need:
-            RECORD.pack_into(self._mm, base + tail, WRAP, 0)
+            RECORD.pack_into(self._mm, base + tail, WRAP, 0, 0)
             used += capacity - tail
             tail = 0
-        RECORD.pack_into(self._mm, base + tail, len(data), 0)
+        sequence = self._get("write_count") + 1
+        RECORD.pack_into(self._mm, base + tail, len(data), 0, sequence)
         start = base + tail + RECORD.size
         self._mm[start : start + len(data)] = data  # type: ignore[index]
         self._put("used", used + need)
         self._put("count", self._get("count") + 1)
-        self._put("write_count", self._get("write_count") + 1)
+        self._put("write_count", sequence)
         self._put("tail", (tail + need) % capacity)  # last: commits the record
 
     # ------------------------------------------------------------------ read
@@ -561,7 +586,7 @@ class ShmBuffer:
         if self.is_queue:
             if self._slot < 0:
                 raise NmlAccessError(f"buffer {self.name}: an observer cannot consume messages")
-            return self._queue_take(is_removing=True)
+            return self._queue_take(is_consuming=True)
         data, count = self._latest_bytes()
         if data is None or count == self._last_seen:
             return None
@@ -572,7 +597,7 @@ class ShmBuffer:
         """The current status (new or not) or the oldest queued message, not removed."""
         self._require_readable()
         if self.is_queue:
-            return self._queue_take(is_removing=False)
+            return self._queue_take(is_consuming=False)
         data, _ = self._latest_bytes()
         return None if data is None else decode(data, f"buffer {self.name}")
 
@@ -594,6 +619,8 @@ class ShmBuffer:
         return self._has_new_data()
 
     def _has_new_data(self) -> bool:
+        if self.is_broadcast and self._slot >= 0:
+            return self._get("write_count") > self._slot_get(self._slot, "cursor")
         if self.is_queue:
             return self._get("count") > 0
         return self._get("write_count") != self._last_seen
@@ -624,48 +651,95 @@ class ShmBuffer:
                 if spins % 1000 == 0 and self._repair_after_dead_holder():
                     continue
 
-    def _queue_take(self, is_removing: bool) -> NMLmsg | None:
+    def _queue_take(self, is_consuming: bool) -> NMLmsg | None:
+        """The next message for this connection: the oldest one, or in a broadcast queue the
+        oldest this reader has not read yet. Consuming removes it (or moves the cursor)."""
         self._lock()
         try:
-            if self._get("count") == 0:
+            cursor = self._slot_get(self._slot, "cursor") if self.is_broadcast else -1
+            try:
+                found = next((r for r in self._records() if r[2] > cursor), None)
+            except NmlFormatError as exc:
+                discarded = self._get("count")
+                self._reset_queue()
+                raise NmlFormatError(
+                    f"{exc} (corrupt); {discarded} queued message(s) discarded"
+                ) from None
+            if found is None:
                 return None
-            data = self._queue_front()
-            if is_removing:
-                self._queue_pop(len(data))
+            offset, length, sequence = found
+            start = self.layout.data_offset + offset + RECORD.size
+            data = bytes(self._mm[start : start + length])  # type: ignore[index]
+            if is_consuming:
+                if cursor >= 0:
+                    self._slot_put(self._slot, "cursor", sequence)
+                    self._trim_broadcast()
+                else:
+                    self._queue_pop_front()
                 self._wake_waiters()
         finally:
             self._unlock()
         return decode(data, f"buffer {self.name}")
 
-    def _queue_front(self) -> bytes:
+    def _register_broadcast_reader(self) -> None:
+        """Make this connection hold every message until it has read it, starting with what
+        is still queued now (mutex held). Only connections allowed to read (R, RW) do."""
+        oldest = next(self._records(), None)
+        first_unread = oldest[2] - 1 if oldest else self._get("write_count")
+        self._slot_put(self._slot, "cursor", first_unread)
+        self._slot_put(self._slot, "is_reader", 1)
+
+    def _records(self):  # type: ignore[no-untyped-def]
+        """(offset, length, sequence) of each queued record, oldest first (mutex held).
+        Raises NmlFormatError at a record whose header cannot be right."""
         base, capacity = self.layout.data_offset, self.layout.capacity
         head = self._get("head")
-        length = RECORD.unpack_from(self._mm, base + head)[0]
-        if length == WRAP:
-            self._put("used", self._get("used") - (capacity - head))
-            head = 0
-            self._put("head", 0)
-            length = RECORD.unpack_from(self._mm, base)[0]
-        if head % 8 or RECORD.size + length > capacity - head:
-            discarded = self._get("count")
-            self._reset_queue()
-            raise NmlFormatError(
-                f"buffer {self.name}: queue record at offset {head} claims {length} bytes "
-                f"(corrupt); {discarded} queued message(s) discarded"
-            )
-        start = base + head + RECORD.size
-        return bytes(self._mm[start : start + length])  # type: ignore[index]
+        for _ in range(self._get("count")):
+            length, _, sequence = RECORD.unpack_from(self._mm, base + head)  # type: ignore[arg-type]
+            if length == WRAP:
+                head = 0
+                length, _, sequence = RECORD.unpack_from(self._mm, base)  # type: ignore[arg-type]
+            if head % 8 or RECORD.size + length > capacity - head:
+                raise NmlFormatError(
+                    f"buffer {self.name}: queue record at offset {head} claims {length} bytes"
+                )
+            yield head, length, sequence
+            head = (head + RECORD.size + _align8(length)) % capacity
 
-    def _queue_pop(self, length: int) -> None:
+    def _queue_pop_front(self) -> None:
+        base, capacity = self.layout.data_offset, self.layout.capacity
+        head, used = self._get("head"), self._get("used")
+        length = RECORD.unpack_from(self._mm, base + head)[0]  # type: ignore[arg-type]
+        if length == WRAP:
+            used -= capacity - head
+            head = 0
+            length = RECORD.unpack_from(self._mm, base)[0]  # type: ignore[arg-type]
         need = RECORD.size + _align8(length)
         count = self._get("count") - 1
         if count == 0:
             self._reset_queue()
         else:
-            self._put("head", (self._get("head") + need) % self.layout.capacity)
-            self._put("used", self._get("used") - need)
+            self._put("head", (head + need) % capacity)
+            self._put("used", used - need)
             self._put("count", count)
         self._put("read_count", self._get("read_count") + 1)
+
+    def _trim_broadcast(self) -> None:
+        """Drop the messages every live reader has read (mutex held). Without live readers
+        messages stay queued, as in a plain queue, for the next reader to attach."""
+        cursors = [
+            self._slot_get(index, "cursor")
+            for index in range(self.config.max_procs)
+            if self._slot_get(index, "is_reader") and is_process_alive(self._slot_get(index, "pid"))
+        ]
+        if not cursors:
+            return
+        oldest_unread = min(cursors)
+        while self._get("count"):
+            first = next(self._records())
+            if first[2] > oldest_unread:
+                break
+            self._queue_pop_front()
 
     def _reset_queue(self) -> None:
         for key in ("head", "tail", "used", "count"):
@@ -684,23 +758,16 @@ class ShmBuffer:
         out: list[NMLmsg | NmlFormatError] = []
         self._lock()
         try:
-            base, capacity = self.layout.data_offset, self.layout.capacity
-            head = self._get("head")
-            for _ in range(self._get("count")):
-                length = RECORD.unpack_from(self._mm, base + head)[0]
-                if length == WRAP:
-                    head = 0
-                    length = RECORD.unpack_from(self._mm, base)[0]
-                if RECORD.size + length > capacity - head:
-                    out.append(NmlFormatError(f"buffer {self.name}: corrupt record at {head}"))
-                    break
-                start = base + head + RECORD.size
-                data = bytes(self._mm[start : start + length])  # type: ignore[index]
-                try:
-                    out.append(decode(data, f"buffer {self.name}"))
-                except NmlFormatError as exc:
-                    out.append(exc)
-                head = (head + RECORD.size + _align8(length)) % capacity
+            try:
+                for offset, length, _ in self._records():
+                    start = self.layout.data_offset + offset + RECORD.size
+                    data = bytes(self._mm[start : start + length])  # type: ignore[index]
+                    try:
+                        out.append(decode(data, f"buffer {self.name}"))
+                    except NmlFormatError as exc:
+                        out.append(exc)
+            except NmlFormatError as exc:
+                out.append(exc)
         finally:
             self._unlock()
         return out

@@ -10,7 +10,7 @@ import pytest
 from nml.config import NmlConfig, parse
 from nml.errors import NmlAccessError, NmlFormatError, NmlTimeoutError
 from nml.ipcnames import instance_objects
-from nml.shmem import ShmBuffer
+from nml.shmem import RECORD, ShmBuffer
 from tests.nml.sample_messages import TEST_BIG, TEST_CMD, TEST_STAT
 
 NML = """\
@@ -210,7 +210,8 @@ def test_garbage_in_a_queue_is_dropped_with_a_clear_error(opened) -> None:
     master.write(TEST_CMD(index=1))
     master.write(TEST_CMD(index=2))
     base = master.layout.data_offset
-    master._mm[base + 8 : base + 12] = b"\xff\xff\x00\x00"  # first message: unknown type
+    first = base + RECORD.size  # the first message, after its record header
+    master._mm[first : first + 4] = b"\xff\xff\x00\x00"  # unknown type
     with pytest.raises(NmlFormatError, match="unknown message type"):
         reader.read()
     assert reader.read().index == 2  # the bad message was consumed, the good one survives
