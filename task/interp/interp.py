@@ -118,6 +118,7 @@ from .block import (
     O_none,
     is_a_cycle,
 )
+from .comp import QOTHER, CompMixin
 from .cycles import CyclesMixin
 from .errors import (
     INTERP_ENDFILE,
@@ -164,7 +165,7 @@ def _is_near_int(value: float) -> tuple[bool, int]:
     return abs(result - value) < 0.0001, result
 
 
-class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin):
+class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin, CompMixin):
     """LinuxCNC's RS274NGC interpreter, talking to a canon."""
 
     def __init__(self, canon, *, ini=None, parameter_file: str = "", task: int = 0) -> None:
@@ -189,7 +190,10 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin):
         self.block = Block()
         self.use_lazy_close = False
         self.lazy_closing = False
-        self.qc: list = []  # cutter compensation queue (unused while compensation is off)
+        self.qc: list = []  # cutter compensation: moves (and calls) held back
+        self._qc_stale_front = None
+        self.endpoint = [0.0, 0.0]
+        self.endpoint_valid = False
         self._fast = None  # a line taken by the fast path: (motion, words, n)
         self._file_cache: dict[str, list[str]] = {}
 
@@ -930,7 +934,7 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin):
         if not self.qc:
             getattr(self.canon, name)(*args)
         else:
-            self.qc.append((name, args))
+            self.qc.append([QOTHER, name, args])
 
     def execute_block(self, block: Block) -> int:
         block.line_number = self.sequence_number
@@ -1499,9 +1503,6 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin):
         self.tolerance = canon.GET_EXTERNAL_MOTION_CONTROL_TOLERANCE()
         self.naivecam_tolerance = canon.GET_EXTERNAL_MOTION_CONTROL_NAIVECAM_TOLERANCE()
 
-    def qc_scale(self, factor: float) -> None:
-        pass
-
     def convert_lathe_diameter_mode(self, g_code: int, block: Block) -> None:
         if g_code == G_7:
             if not self.lathe_diameter_mode:
@@ -1535,7 +1536,13 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin):
         self._enq("COMMENT", "interpreter: cutter radius compensation off")
         if self.cutter_comp_side and self.cutter_comp_radius > 0.0 and \
                 not self.cutter_comp_firstmove:
-            raise InterpError("Cutter radius compensation is not supported yet")
+            cx, cy, _ = self.comp_get_current()
+            self.move_endpoint_and_flush(cx, cy)
+            self.dequeue_canons()
+            self.current[0] = self.program_x
+            self.current[1] = self.program_y
+            self.current[2] = self.program_z
+            self.arc_not_allowed = True
         self.cutter_comp_side = 0
         self.cutter_comp_firstmove = True
 
@@ -1884,7 +1891,13 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin):
         if self.cutter_comp_side and self.cutter_comp_radius > 0.0:
             if block.g_modes[GM_MODAL_0] == G_53:
                 raise InterpError("Cannot use g53 with cutter radius comp")
-            raise InterpError("Cutter radius compensation is not supported yet")
+            if self.plane not in (C.PLANE_XY, C.PLANE_XZ):
+                raise InterpError("BUG: Invalid plane for cutter compensation")
+            if self.cutter_comp_firstmove:
+                self.convert_straight_comp1(move, block, ends)
+            else:
+                self.convert_straight_comp2(move, block, ends)
+            return
         canon = self.canon
         if move == G_0:
             canon.STRAIGHT_TRAVERSE(block.line_number, *ends)
@@ -2000,8 +2013,6 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin):
                 raise InterpError("X and z words missing for arc in xz plane")
         ends = self.find_ends(block)
         self.motion_mode = move
-        if self.cutter_comp_side and self.cutter_comp_radius != 0.0 and plane != C.PLANE_YZ:
-            raise InterpError("Cutter radius compensation is not supported yet")
         if plane == C.PLANE_XY:
             axes = (0, 1, 2)
             offsets = (block.i_number, block.j_number)
@@ -2011,6 +2022,12 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin):
         else:
             axes = (1, 2, 0)
             offsets = (block.j_number, block.k_number)
+        if self.cutter_comp_side and self.cutter_comp_radius != 0.0 and plane != C.PLANE_YZ:
+            if self.cutter_comp_firstmove:
+                self.convert_arc_comp1(move, block, ends, offsets)
+            else:
+                self.convert_arc_comp2(move, block, ends, offsets)
+            return
         self.convert_arc2(move, block, axes, ends, offsets)
 
     def convert_arc2(self, move: int, block: Block, axes, ends, offsets) -> None:
@@ -2046,7 +2063,7 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin):
             self.plane, ("!", "!"))
 
     def arc_data_ijk(self, move, cx, cy, ex, ey, absolute, i, j, p_number, radius_tol,
-                     spiral_abs, spiral_rel):
+                     spiral_abs, spiral_rel, comp_side=0, tool_radius=0.0):
         a, b = self._arc_axis_names()
         if absolute:
             center_x, center_y = i, j
@@ -2067,6 +2084,9 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin):
                 f"start=({a}{cx:.4f},{b}{cy:.4f}) center=({a}{center_x:.4f},{b}{center_y:.4f}) "
                 f"end=({a}{ex:.4f},{b}{ey:.4f}) r1={radius:.4f} r2={radius2:.4f} "
                 f"abs_err={_c_format('%.4g', abs_err)} rel_err={rel_err * 100:.4f}%")
+        if comp_side and radius <= tool_radius and (
+                (comp_side == LEFT and move == G_3) or (comp_side == RIGHT and move == G_2)):
+            raise InterpError("Tool radius not less than arc radius with comp")
         turn = -p_number if move == G_2 else p_number
         return center_x, center_y, turn
 
@@ -2258,7 +2278,10 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin):
     # ================================================================= stop
     def convert_stop(self, block: Block) -> int:
         canon = self.canon
-        self.flush_comp()
+        cx, cy, _ = self.comp_get_current() if self.plane in (C.PLANE_XY, C.PLANE_XZ) else \
+            (0.0, 0.0, 0.0)
+        self.move_endpoint_and_flush(cx, cy)
+        self.dequeue_canons()
         m4 = block.m_modes[4]
         if m4 == 99 and self.call_level > 0:
             raise InterpError("Bug:  Reached convert_stop() from M99 as subprogram return")
@@ -2338,12 +2361,6 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin):
             return INTERP_EXIT
         return INTERP_OK
 
-    def flush_comp(self) -> None:
-        """Cutter compensation would flush its queued moves here."""
-        for name, args in self.qc:
-            getattr(self.canon, name)(*args)
-        self.qc.clear()
-
     # ============================================================== unwinding
     def unwind_call(self) -> None:
         while self.call_level > 0:
@@ -2369,7 +2386,7 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin):
         self.skipping_to_sub = None
         self.offset_map.clear()
         self.mdi_interrupt = False
-        self.qc.clear()
+        self.qc_reset()
 
     def _open_cached(self, filename: str) -> list[str] | None:
         lines = self._file_cache.get(filename)

@@ -56,3 +56,40 @@ def plus_pi_2(value: float) -> float:
     """``(double)(value + M_PI_2l)``"""
     _, ld, _, pi_2, _ = _np()
     return float(ld(value) + pi_2)
+
+
+def ld(value):
+    """A value as an x87 long double (numpy), for expressions LinuxCNC evaluates that way."""
+    return _np()[1](value)
+
+
+def pi_ld():
+    return _np()[2]
+
+
+def pi_2_ld():
+    return _np()[3]
+
+
+def sinl(value) -> float:
+    """``sin`` of a long double argument (C++ picks ``sinl``), rounded to double."""
+    return float(_np()[0].sin(value))
+
+
+def find_turn(x1: float, y1: float, center_x: float, center_y: float, turn: int, x2: float,
+              y2: float) -> float:
+    """LinuxCNC's find_turn: the swept angle, with its long double 2*pi steps."""
+    import math
+
+    if turn == 0:
+        return 0.0
+    alpha = math.atan2(y1 - center_y, x1 - center_x)
+    beta = math.atan2(y2 - center_y, x2 - center_x)
+    two_pi = 2 * pi_ld()
+    if turn > 0:
+        if beta <= alpha:
+            beta = float(ld(beta) + two_pi)
+        return float((ld(beta) - ld(alpha)) + (turn - 1) * two_pi)
+    if alpha <= beta:
+        alpha = float(ld(alpha) + two_pi)
+    return float((ld(beta) - ld(alpha)) + (turn + 1) * two_pi)
