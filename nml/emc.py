@@ -426,6 +426,13 @@ class EMC_JOINT_SET_MAX_VELOCITY(EMC_JOINT_CMD_MSG, type_id=116):
     vel: f64
 
 
+class EMC_JOINT_SET_MAX_ACCELERATION(EMC_JOINT_CMD_MSG, type_id=117):
+    """[JOINT_n]MAX_ACCELERATION. Not an NML message in LinuxCNC 2.9, where task writes it
+    straight into motion's shared memory; here every task -> motion command is NML."""
+
+    acc: f64
+
+
 class EMC_JOINT_INIT(EMC_JOINT_CMD_MSG, type_id=118): ...
 
 
@@ -501,6 +508,30 @@ class EMC_AXIS_STAT_MSG(RCS_STAT_MSG):
     """Status of one world axis (X Y Z A B C U V W: ``axis`` 0..8)."""
 
     axis: i32
+
+
+class EMC_AXIS_CMD_MSG(RCS_CMD_MSG):
+    """Configuration of one world axis (``axis`` 0..8 for X..W), from [AXIS_L] via task.
+    LinuxCNC 2.9 passes these through motion's shared memory; here they are NML messages,
+    numbered in the free 14x block of the joint/axis group."""
+
+    axis: i32
+
+
+class EMC_AXIS_SET_MIN_POSITION_LIMIT(EMC_AXIS_CMD_MSG, type_id=141):
+    limit: f64
+
+
+class EMC_AXIS_SET_MAX_POSITION_LIMIT(EMC_AXIS_CMD_MSG, type_id=142):
+    limit: f64
+
+
+class EMC_AXIS_SET_MAX_VELOCITY(EMC_AXIS_CMD_MSG, type_id=143):
+    vel: f64
+
+
+class EMC_AXIS_SET_MAX_ACCELERATION(EMC_AXIS_CMD_MSG, type_id=144):
+    acc: f64
 
 
 class EMC_AXIS_STAT(EMC_AXIS_STAT_MSG, type_id=199):

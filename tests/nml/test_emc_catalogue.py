@@ -268,8 +268,20 @@ def leaves(values: Any, path: str = "") -> Iterator[tuple[str, Any]]:
 # ----------------------------------------------------------------------------- numbers and names
 
 
+# Task -> motion settings that LinuxCNC 2.9 writes into motion's shared memory instead of
+# sending as NML messages; here they are NML messages too, in free numbers of their group.
+OUR_TYPES = {
+    "EMC_JOINT_SET_MAX_ACCELERATION": 117,
+    "EMC_AXIS_SET_MIN_POSITION_LIMIT": 141,
+    "EMC_AXIS_SET_MAX_POSITION_LIMIT": 142,
+    "EMC_AXIS_SET_MAX_VELOCITY": 143,
+    "EMC_AXIS_SET_MAX_ACCELERATION": 144,
+}
+
+
 def test_catalogue_is_linuxcnc_types_with_their_numbers() -> None:
-    assert {cls.NAME: cls.TYPE for cls in CATALOGUE} == LINUXCNC_TYPES
+    assert {cls.NAME: cls.TYPE for cls in CATALOGUE} == LINUXCNC_TYPES | OUR_TYPES
+    assert not set(OUR_TYPES.values()) & set(LINUXCNC_TYPES.values())
 
 
 def test_spec_nml_053_numbers() -> None:

@@ -1,0 +1,720 @@
+"""The motion controller: commands in, one servo period at a time, joint commands out.
+
+``MotionController`` is what ``loadrt motmod`` runs (``motion/motmod.py`` connects it to HAL
+pins and NML buffers). It owns the joints, the free-mode planners, the coordinated-mode
+trajectory planner and the kinematics, and follows LinuxCNC's position flow (MOT-001..007):
+
+    coord:  trajectory planner -> carte_pos_cmd -> inverse kinematics -> joint pos_cmd
+    free:   per-joint planners -> joint pos_cmd -> forward kinematics -> carte_pos_cmd
+    both:   motor_pos_cmd = pos_cmd + motor_offset;  pos_fb = motor_pos_fb - motor_offset
+
+Commands are NML messages (``nml.emc``); ``handle(cmd)`` returns ``None`` when the command
+was carried out, or the reason it was refused (MOT-019: where LinuxCNC ignores a command
+silently, we refuse it and say why). Faults found during a period (following error, hard
+limits, planner errors) are queued in ``errors`` for the caller to report.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+from motion.free import FreePlanner, JogLimitError
+from motion.kinematics import Kinematics, KinematicsError
+from motion.pose import AXIS_LETTERS, NUM_AXES, EmcPose
+from motion.tp import TermCond, TrajectoryPlanner
+from motion.tp.planner import ProbeType
+from nml import emc
+
+FREE, COORD, TELEOP = (
+    emc.EMC_TRAJ_MODE_ENUM.FREE,
+    emc.EMC_TRAJ_MODE_ENUM.COORD,
+    emc.EMC_TRAJ_MODE_ENUM.TELEOP,
+)
+_TERM_CONDS = {
+    emc.EMC_TRAJ_TERM_COND.STOP: TermCond.STOP,
+    emc.EMC_TRAJ_TERM_COND.EXACT: TermCond.EXACT,
+    emc.EMC_TRAJ_TERM_COND.BLEND: TermCond.BLEND,
+}
+DEFAULT_JOINT_VEL = 1.0
+DEFAULT_JOINT_ACC = 1.0
+
+
+@dataclass
+class Joint:
+    """One joint's configuration and state (ARCH-022: all of a joint in one record)."""
+
+    index: int
+    min_limit: float = -math.inf
+    max_limit: float = math.inf
+    max_vel: float = DEFAULT_JOINT_VEL
+    max_acc: float = DEFAULT_JOINT_ACC
+    max_ferror: float = 1.0
+    min_ferror: float = 1.0
+    home: float = 0.0
+    home_offset: float = 0.0
+    home_search_vel: float = 0.0
+    backlash: float = 0.0
+    pos_cmd: float = 0.0
+    pos_fb: float = 0.0
+    motor_offset: float = 0.0
+    vel_cmd: float = 0.0
+    ferror: float = 0.0
+    ferror_high_mark: float = 0.0
+    is_homed: bool = False
+    is_homing: bool = False
+    is_active: bool = True
+    is_faulted: bool = False
+    is_on_pos_limit: bool = False
+    is_on_neg_limit: bool = False
+    planner: FreePlanner = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.planner = FreePlanner(self.max_vel, self.max_acc)
+
+    def apply_limits(self) -> None:
+        self.planner.set_limits(self.max_vel, self.max_acc, self.min_limit, self.max_limit)
+
+    @property
+    def is_in_position(self) -> bool:
+        return not self.planner.is_active
+
+
+@dataclass
+class Spindle:
+    speed: float = 0.0  # signed rpm commanded (negative: reverse)
+    scale: float = 1.0
+    is_brake_on: bool = True
+    is_override_enabled: bool = True
+    orient_state: int = 0
+
+
+@dataclass
+class Inputs:
+    """HAL inputs of one servo period."""
+
+    motor_pos_fb: list[float]
+    pos_limit: list[bool]
+    neg_limit: list[bool]
+    amp_fault: list[bool]
+    probe: bool = False
+    enable: bool = True  # motion.enable
+    digital_in: list[bool] = field(default_factory=list)
+    analog_in: list[float] = field(default_factory=list)
+
+
+class MotionController:
+    def __init__(
+        self,
+        kinematics: Kinematics,
+        num_joints: int,
+        period_s: float,
+        num_spindles: int = 1,
+        num_dio: int = 4,
+        num_aio: int = 4,
+        planner_factory: Callable[..., TrajectoryPlanner] = TrajectoryPlanner,
+    ) -> None:
+        if not 1 <= num_joints <= emc.EMCMOT_MAX_JOINTS:
+            raise ValueError(f"num_joints must be 1..{emc.EMCMOT_MAX_JOINTS}, got {num_joints}")
+        if getattr(kinematics, "num_joints", num_joints) != num_joints:
+            raise ValueError(
+                f"kinematics maps {kinematics.num_joints} joints, motmod has {num_joints}"
+            )
+        self.kins = kinematics
+        self.period_s = period_s
+        self.joints = [Joint(i) for i in range(num_joints)]
+        self.spindles = [Spindle() for _ in range(num_spindles)]
+        self.digital_out = [False] * num_dio
+        self.analog_out = [0.0] * num_aio
+        self.digital_in = [False] * num_dio
+        self.analog_in = [0.0] * num_aio
+        self.axis_max_vel = [math.inf] * NUM_AXES
+        self.axis_max_acc = [math.inf] * NUM_AXES
+        self.axis_min_limit = [-math.inf] * NUM_AXES
+        self.axis_max_limit = [math.inf] * NUM_AXES
+        self.tp = planner_factory(self.axis_max_vel, self.axis_max_acc, cycle_time=period_s)
+        self.mode = FREE
+        self.is_enabled = False
+        self.is_override_limits = False
+        self.carte_pos_cmd = EmcPose()
+        self.carte_pos_fb = EmcPose()
+        self.traj_vel = 1.0  # EMC_TRAJ_SET_VELOCITY: default feed for moves without one
+        self.traj_acc = 1.0
+        self.max_vel = math.inf
+        self.max_acc = math.inf
+        self.term_cond = TermCond.BLEND
+        self.tolerance = 0.0
+        self.next_motion_id = 0
+        self.motion_type = 0
+        self.errors: list[str] = []
+        self._pending_douts: list[tuple[int, bool]] = []
+        self._pending_aouts: list[tuple[int, float]] = []
+
+    # ================================================================ commands
+    def handle(self, cmd: emc.NMLmsg) -> str | None:
+        """Carry out one command; ``None`` if done, else why it was refused."""
+        handler = _HANDLERS.get(type(cmd))
+        if handler is None:
+            return f"motion does not handle {cmd.NAME}"
+        try:
+            return handler(self, cmd)
+        except (ValueError, KinematicsError) as exc:
+            return f"{cmd.NAME}: {exc}"
+
+    def _joint(self, index: int) -> Joint:
+        if not 0 <= index < len(self.joints):
+            raise ValueError(f"joint {index} does not exist (0..{len(self.joints) - 1})")
+        return self.joints[index]
+
+    def _enable(self, _cmd: emc.NMLmsg) -> None:
+        self.is_enabled = True
+        for joint in self.joints:
+            joint.is_faulted = False
+            joint.planner.reset(joint.pos_cmd)
+        return None
+
+    def _disable(self, _cmd: emc.NMLmsg | None = None) -> None:
+        """Motion off: everything stops where it is, the queue is emptied (MOT-021)."""
+        self.is_enabled = False
+        self._stop_everything_now()
+        return None
+
+    def _fault(self, message: str) -> None:
+        """A fault found during a period: report it and turn motion off."""
+        self.errors.append(message)
+        self._disable()
+
+    def _stop_everything_now(self) -> None:
+        for joint in self.joints:
+            joint.planner.reset(joint.pos_cmd)
+            joint.is_homing = False
+        self.tp.set_position(list(self.carte_pos_cmd))
+
+    def _abort(self, _cmd: emc.NMLmsg) -> None:
+        """ABORT: always accepted, idempotent; decelerates, then empties the queue (MOT-022)."""
+        for joint in self.joints:
+            joint.planner.stop()
+            joint.is_homing = False
+        self.tp.abort()
+        return None
+
+    def _set_mode(self, cmd: emc.EMC_TRAJ_SET_MODE) -> str | None:
+        mode = cmd.mode
+        if mode == self.mode:
+            return None
+        if mode not in (FREE, COORD, TELEOP):
+            return f"unknown trajectory mode {mode}"
+        if self._is_moving():
+            return "cannot change mode while moving"
+        if mode in (COORD, TELEOP) and not all(j.is_homed for j in self.joints if j.is_active):
+            return "all joints must be homed before going into coordinated mode"
+        if mode == TELEOP:
+            return "teleop mode is not supported yet"
+        if mode == COORD:
+            self.tp.set_position(list(self.carte_pos_cmd))
+        else:
+            for joint in self.joints:
+                joint.planner.reset(joint.pos_cmd)
+        self.mode = mode
+        return None
+
+    def _is_moving(self) -> bool:
+        return not self.tp.is_done or any(j.planner.is_active for j in self.joints)
+
+    # ---------------------------------------------------------------- jogs (free mode)
+    def _jog(self, cmd: emc.NMLmsg) -> str | None:
+        if cmd.jjogmode != emc.JOG_MODE.JOINT:
+            return "axis (teleop) jogging is not supported yet; jog joints"
+        if self.mode != FREE:
+            return "jogging a joint needs free (joint) mode"
+        if not self.is_enabled:
+            return "cannot jog with motion disabled"
+        joint = self._joint(cmd.joint_or_axis)
+        override = self.is_override_limits or not joint.is_homed
+        try:
+            if isinstance(cmd, emc.EMC_JOG_STOP):
+                joint.planner.stop()
+            elif isinstance(cmd, emc.EMC_JOG_CONT):
+                joint.planner.jog_cont(cmd.vel, override)
+            elif isinstance(cmd, emc.EMC_JOG_INCR):
+                direction = math.copysign(1.0, cmd.vel) if cmd.vel else 1.0
+                joint.planner.jog_incr(cmd.incr * direction, abs(cmd.vel), override)
+            else:
+                joint.planner.jog_abs(cmd.pos, abs(cmd.vel), override)
+        except JogLimitError as exc:
+            return f"joint {joint.index}: {exc}"
+        return None
+
+    # ---------------------------------------------------------------- coordinated moves
+    def _require_coord(self) -> str | None:
+        if self.mode != COORD:
+            return "moves need coordinated mode"
+        if not self.is_enabled:
+            return "cannot move with motion disabled"
+        if self.tp.is_full:
+            return "motion queue is full"
+        return None
+
+    def _check_soft_limits(self, end: EmcPose, what: str) -> str | None:
+        """Refuse a move whose end is outside an axis's or a joint's limits, in LinuxCNC's
+        words (one line per limit crossed) (MOT-072)."""
+        if self.is_override_limits:
+            return None
+        line = self.next_motion_id
+        problems = []
+        for index, value in enumerate(end):
+            letter = AXIS_LETTERS[index].upper()
+            if value > self.axis_max_limit[index]:
+                problems.append(f"{what} on line {line} would exceed {letter}'s positive limit")
+            elif value < self.axis_min_limit[index]:
+                problems.append(f"{what} on line {line} would exceed {letter}'s negative limit")
+        for joint, target in zip(self.joints, self.kins.inverse(end), strict=False):
+            if target > joint.max_limit:
+                problems.append(
+                    f"{what} on line {line} would exceed joint {joint.index}'s positive limit"
+                )
+            elif target < joint.min_limit:
+                problems.append(
+                    f"{what} on line {line} would exceed joint {joint.index}'s negative limit"
+                )
+        return "\n".join(problems) or None
+
+    def _linear_move(self, cmd: emc.EMC_TRAJ_LINEAR_MOVE) -> str | None:
+        problem = self._require_coord() or self._check_soft_limits(_pose(cmd.end), "Linear move")
+        if problem:
+            return problem
+        self.tp.add_line(
+            list(_pose(cmd.end)),
+            cmd.vel,
+            cmd.ini_maxvel,
+            cmd.acc,
+            motion_id=self.next_motion_id,
+            term=self.term_cond,
+            tolerance=self.tolerance,
+            is_rapid=cmd.type == emc.EMC_MOTION_TYPE.TRAVERSE,
+        )
+        self._flush_synchronised_outputs()
+        return None
+
+    def _circular_move(self, cmd: emc.EMC_TRAJ_CIRCULAR_MOVE) -> str | None:
+        problem = self._require_coord() or self._check_soft_limits(_pose(cmd.end), "Circular move")
+        if problem:
+            return problem
+        self.tp.add_circle(
+            list(_pose(cmd.end)),
+            (cmd.center.x, cmd.center.y, cmd.center.z),
+            (cmd.normal.x, cmd.normal.y, cmd.normal.z),
+            cmd.turn,
+            cmd.vel,
+            cmd.ini_maxvel,
+            cmd.acc,
+            motion_id=self.next_motion_id,
+            term=self.term_cond,
+            tolerance=self.tolerance,
+        )
+        self._flush_synchronised_outputs()
+        return None
+
+    def _probe(self, cmd: emc.EMC_TRAJ_PROBE) -> str | None:
+        problem = self._require_coord() or self._check_soft_limits(_pose(cmd.pos), "Probe move")
+        if problem:
+            return problem
+        # probe_type as in LinuxCNC: bit 1 set = away (G38.4/5), bit 0 = no error if no trip
+        probe = ProbeType.AWAY if cmd.probe_type & 2 else ProbeType.TOWARD
+        self.tp.add_probe(
+            list(_pose(cmd.pos)), cmd.vel, cmd.ini_maxvel, cmd.acc, self.next_motion_id, probe
+        )
+        return None
+
+    def _flush_synchronised_outputs(self) -> None:
+        """M62/M64-style outputs queued with the next move take effect now (MOT-060/061)."""
+        for index, value in self._pending_douts:
+            self.digital_out[index] = value
+        for index, value in self._pending_aouts:
+            self.analog_out[index] = value
+        self._pending_douts.clear()
+        self._pending_aouts.clear()
+
+    # ---------------------------------------------------------------- settings
+    def _set_term_cond(self, cmd: emc.EMC_TRAJ_SET_TERM_COND) -> str | None:
+        if cmd.cond not in _TERM_CONDS:
+            return f"unknown termination condition {cmd.cond}"
+        if cmd.tolerance < 0:
+            return f"negative blend tolerance {cmd.tolerance}"
+        self.term_cond = _TERM_CONDS[emc.EMC_TRAJ_TERM_COND(cmd.cond)]
+        self.tolerance = cmd.tolerance
+        return None
+
+    def _set_velocity(self, cmd: emc.EMC_TRAJ_SET_VELOCITY) -> str | None:
+        if not cmd.velocity > 0:
+            return f"velocity must be positive, got {cmd.velocity}"
+        self.traj_vel = cmd.velocity
+        return None
+
+    def _set_acceleration(self, cmd: emc.EMC_TRAJ_SET_ACCELERATION) -> str | None:
+        if not cmd.acceleration > 0:
+            return f"acceleration must be positive, got {cmd.acceleration}"
+        self.traj_acc = cmd.acceleration
+        return None
+
+    def _set_max_velocity(self, cmd: emc.EMC_TRAJ_SET_MAX_VELOCITY) -> str | None:
+        if not cmd.velocity > 0:
+            return f"maximum velocity must be positive, got {cmd.velocity}"
+        self.max_vel = cmd.velocity
+        self._apply_traj_limits()
+        return None
+
+    def _set_max_acceleration(self, cmd: emc.EMC_TRAJ_SET_MAX_ACCELERATION) -> str | None:
+        if not cmd.acceleration > 0:
+            return f"maximum acceleration must be positive, got {cmd.acceleration}"
+        self.max_acc = cmd.acceleration
+        self._apply_traj_limits()
+        return None
+
+    def _axis_settings(self, cmd: emc.NMLmsg) -> str | None:
+        """[AXIS_L] limits sent by task at start-up (KIN-002)."""
+        axis = cmd.axis
+        if not 0 <= axis < NUM_AXES:
+            return f"axis {axis} does not exist (0..{NUM_AXES - 1} for X..W)"
+        if isinstance(cmd, emc.EMC_AXIS_SET_MIN_POSITION_LIMIT):
+            self.axis_min_limit[axis] = cmd.limit
+        elif isinstance(cmd, emc.EMC_AXIS_SET_MAX_POSITION_LIMIT):
+            self.axis_max_limit[axis] = cmd.limit
+        elif isinstance(cmd, emc.EMC_AXIS_SET_MAX_VELOCITY):
+            self.axis_max_vel[axis] = cmd.vel
+        else:
+            self.axis_max_acc[axis] = cmd.acc
+        self._apply_traj_limits()
+        return None
+
+    def _apply_traj_limits(self) -> None:
+        self.tp.set_limits(self.axis_max_vel, self.axis_max_acc, self.max_vel, self.max_acc)
+
+    def _set_scale(self, cmd: emc.EMC_TRAJ_SET_SCALE) -> str | None:
+        self.tp.set_feed_scale(cmd.scale)
+        for joint in self.joints:
+            joint.planner.scale = max(cmd.scale, 0.0)
+        return None
+
+    def _set_rapid_scale(self, cmd: emc.EMC_TRAJ_SET_RAPID_SCALE) -> str | None:
+        self.tp.set_rapid_scale(cmd.scale)
+        return None
+
+    def _set_motion_id(self, cmd: emc.EMC_TRAJ_SET_MOTION_ID) -> None:
+        self.next_motion_id = cmd.id
+        return None
+
+    def _pause(self, _cmd: emc.NMLmsg) -> None:
+        self.tp.pause()
+        return None
+
+    def _resume(self, _cmd: emc.NMLmsg) -> None:
+        self.tp.resume()
+        return None
+
+    def _step(self, _cmd: emc.NMLmsg) -> None:
+        self.tp.step_once()
+        return None
+
+    def _clear_probe(self, _cmd: emc.NMLmsg) -> None:
+        self.tp.clear_probe_flag()
+        return None
+
+    # ---------------------------------------------------------------- joints
+    def _joint_limits(self, cmd: emc.NMLmsg) -> str | None:
+        joint = self._joint(cmd.joint)
+        if isinstance(cmd, emc.EMC_JOINT_SET_MIN_POSITION_LIMIT):
+            joint.min_limit = cmd.limit
+        elif isinstance(cmd, emc.EMC_JOINT_SET_MAX_POSITION_LIMIT):
+            joint.max_limit = cmd.limit
+        elif isinstance(cmd, emc.EMC_JOINT_SET_MAX_VELOCITY):
+            joint.max_vel = cmd.vel
+        elif isinstance(cmd, emc.EMC_JOINT_SET_FERROR):
+            joint.max_ferror = cmd.ferror
+        elif isinstance(cmd, emc.EMC_JOINT_SET_MIN_FERROR):
+            joint.min_ferror = cmd.ferror
+        elif isinstance(cmd, emc.EMC_JOINT_SET_BACKLASH):
+            joint.backlash = cmd.backlash
+        elif isinstance(cmd, emc.EMC_JOINT_SET_MAX_ACCELERATION):
+            joint.max_acc = cmd.acc
+        joint.apply_limits()
+        return None
+
+    def _homing_params(self, cmd: emc.EMC_JOINT_SET_HOMING_PARAMS) -> None:
+        joint = self._joint(cmd.joint)
+        joint.home, joint.home_offset = cmd.home, cmd.offset
+        joint.home_search_vel = cmd.search_vel
+        return None
+
+    def _home(self, cmd: emc.EMC_JOINT_HOME) -> str | None:
+        """Home a joint (-1: all). Without a search velocity the joint is homed where it
+        stands, which becomes HOME_OFFSET, then it moves to HOME (as LinuxCNC does)."""
+        if self.mode != FREE:
+            return "homing needs free (joint) mode"
+        if not self.is_enabled:
+            return "cannot home with motion disabled"
+        targets = self.joints if cmd.joint == -1 else [self._joint(cmd.joint)]
+        for joint in targets:
+            if joint.home_search_vel != 0:
+                return (
+                    f"joint {joint.index}: homing with a switch search (HOME_SEARCH_VEL) needs "
+                    "the homing module, not integrated yet"
+                )
+        for joint in targets:
+            joint.motor_offset += joint.pos_cmd - joint.home_offset
+            joint.pos_cmd = joint.pos_fb = joint.home_offset
+            joint.planner.reset(joint.home_offset)
+            joint.is_homed = True
+            joint.planner.move_to(joint.home, joint.max_vel)
+        return None
+
+    def _unhome(self, cmd: emc.EMC_JOINT_UNHOME) -> str | None:
+        if self._is_moving():
+            return "cannot unhome while moving"
+        targets = self.joints if cmd.joint == -1 else [self._joint(cmd.joint)]
+        for joint in targets:
+            joint.is_homed = False
+        return None
+
+    def _override_limits(self, cmd: emc.EMC_JOINT_OVERRIDE_LIMITS) -> None:
+        self.is_override_limits = cmd.joint >= 0
+        return None
+
+    # ---------------------------------------------------------------- outputs, spindle
+    def _set_dout(self, cmd: emc.EMC_MOTION_SET_DOUT) -> str | None:
+        if cmd.index >= len(self.digital_out):
+            return f"digital output {cmd.index} does not exist (num_dio {len(self.digital_out)})"
+        if cmd.now:
+            self.digital_out[cmd.index] = bool(cmd.start)
+        else:
+            self._pending_douts.append((cmd.index, bool(cmd.start)))
+        return None
+
+    def _set_aout(self, cmd: emc.EMC_MOTION_SET_AOUT) -> str | None:
+        if cmd.index >= len(self.analog_out):
+            return f"analog output {cmd.index} does not exist (num_aio {len(self.analog_out)})"
+        if cmd.now:
+            self.analog_out[cmd.index] = cmd.start
+        else:
+            self._pending_aouts.append((cmd.index, cmd.start))
+        return None
+
+    def _spindle(self, cmd: emc.NMLmsg) -> str | None:
+        if not 0 <= cmd.spindle < len(self.spindles):
+            return f"spindle {cmd.spindle} does not exist (num_spindles {len(self.spindles)})"
+        spindle = self.spindles[cmd.spindle]
+        if isinstance(cmd, emc.EMC_SPINDLE_ON):
+            spindle.speed = cmd.speed
+            spindle.is_brake_on = False
+        elif isinstance(cmd, emc.EMC_SPINDLE_OFF):
+            spindle.speed = 0.0
+            spindle.is_brake_on = True
+        elif isinstance(cmd, emc.EMC_SPINDLE_BRAKE_ENGAGE):
+            spindle.is_brake_on = True
+        elif isinstance(cmd, emc.EMC_SPINDLE_BRAKE_RELEASE):
+            spindle.is_brake_on = False
+        return None
+
+    def _spindle_scale(self, cmd: emc.EMC_TRAJ_SET_SPINDLE_SCALE) -> str | None:
+        if not 0 <= cmd.spindle < len(self.spindles):
+            return f"spindle {cmd.spindle} does not exist (num_spindles {len(self.spindles)})"
+        self.spindles[cmd.spindle].scale = cmd.scale
+        return None
+
+    # ================================================================ servo period
+    def update(self, inputs: Inputs) -> None:
+        """One servo period: feedback, checks, planning, kinematics (MOT-001..007, 016)."""
+        for joint, motor_fb in zip(self.joints, inputs.motor_pos_fb, strict=False):
+            joint.pos_fb = motor_fb - joint.motor_offset
+        self.digital_in = list(inputs.digital_in) or self.digital_in
+        self.analog_in = list(inputs.analog_in) or self.analog_in
+        if self.is_enabled and not inputs.enable:
+            self._fault("motion disabled by the motion.enable pin")
+        self._check_hard_limits_and_faults(inputs)
+        if self.mode == COORD:
+            self.tp.probe_input = inputs.probe
+            position = self.tp.step()
+            error = self.tp.take_error()
+            if error:
+                self.errors.append(error)
+            pose = EmcPose(*position.tolist())
+            self._set_joints_from_pose(pose)
+        else:
+            for joint in self.joints:
+                before = joint.pos_cmd
+                joint.pos_cmd = joint.planner.step(self.period_s)
+                joint.vel_cmd = (joint.pos_cmd - before) / self.period_s
+            self.carte_pos_cmd = self._forward([j.pos_cmd for j in self.joints])
+        self.carte_pos_fb = self._forward([j.pos_fb for j in self.joints])
+        self._check_following_error()
+
+    def _set_joints_from_pose(self, pose: EmcPose) -> None:
+        try:
+            targets = self.kins.inverse(pose)
+        except KinematicsError as exc:
+            self._fault(f"inverse kinematics failed: {exc}; motion stopped")
+            return
+        for joint, target in zip(self.joints, targets, strict=False):
+            joint.vel_cmd = (target - joint.pos_cmd) / self.period_s
+            joint.pos_cmd = target
+        self.carte_pos_cmd = pose
+
+    def _forward(self, joints: list[float]) -> EmcPose:
+        try:
+            return self.kins.forward(joints)
+        except KinematicsError:
+            return self.carte_pos_cmd  # a singularity: keep the last pose (KIN-012)
+
+    def _check_hard_limits_and_faults(self, inputs: Inputs) -> None:
+        for joint in self.joints:
+            index = joint.index
+            joint.is_on_pos_limit = bool(inputs.pos_limit[index])
+            joint.is_on_neg_limit = bool(inputs.neg_limit[index])
+            if not self.is_enabled:
+                continue
+            if inputs.amp_fault[index] and not joint.is_faulted:
+                joint.is_faulted = True
+                self._fault(f"joint {index} amplifier fault")
+            elif (joint.is_on_pos_limit or joint.is_on_neg_limit) and not (
+                self.is_override_limits or joint.is_homing
+            ):
+                side = "positive" if joint.is_on_pos_limit else "negative"
+                self._fault(f"joint {index} on limit switch error ({side})")
+
+    def _check_following_error(self) -> None:
+        """MIN_FERROR at rest rising linearly to FERROR at max velocity (MOT-015)."""
+        for joint in self.joints:
+            joint.ferror = joint.pos_cmd - joint.pos_fb
+            magnitude = abs(joint.ferror)
+            joint.ferror_high_mark = max(joint.ferror_high_mark, magnitude)
+            if not self.is_enabled:
+                continue
+            fraction = min(abs(joint.vel_cmd) / joint.max_vel, 1.0) if joint.max_vel else 1.0
+            limit = joint.min_ferror + (joint.max_ferror - joint.min_ferror) * fraction
+            if magnitude > max(limit, joint.min_ferror):
+                self._fault(f"joint {joint.index} following error")
+                return
+
+    # ================================================================ status
+    @property
+    def is_in_position(self) -> bool:
+        return not self._is_moving()
+
+    def fill_status(self, stat: emc.EMC_MOTION_STAT) -> None:
+        """Write the controller's state into an EMC_MOTION_STAT (MOT-066..071)."""
+        traj = stat.traj
+        traj.cycleTime = self.period_s
+        traj.joints = len(self.joints)
+        traj.spindles = len(self.spindles)
+        traj.axis_mask = getattr(self.kins, "axis_mask", 0b111)
+        traj.mode = self.mode
+        traj.enabled = self.is_enabled
+        traj.inpos = self.is_in_position
+        traj.queue = self.tp.queue_depth
+        traj.queueFull = self.tp.is_full
+        traj.id = self.tp.motion_id
+        traj.paused = self.tp.is_paused
+        traj.scale = self.tp.feed_scale
+        traj.rapid_scale = self.tp.rapid_scale
+        _store_pose(traj.position, self.carte_pos_cmd)
+        _store_pose(traj.actualPosition, self.carte_pos_fb)
+        traj.velocity = self.traj_vel
+        traj.acceleration = self.traj_acc
+        traj.maxVelocity = self.max_vel if math.isfinite(self.max_vel) else 0.0
+        traj.maxAcceleration = self.max_acc if math.isfinite(self.max_acc) else 0.0
+        _store_pose(traj.probedPosition, EmcPose(*self.tp.probe_pos.tolist()))
+        traj.probe_tripped = self.tp.probe_tripped
+        traj.kinematics_type = int(self.kins.kinematics_type())
+        traj.distance_to_go = self.tp.distance_to_go if self.mode == COORD else 0.0
+        traj.current_vel = self.tp.vel if self.mode == COORD else 0.0
+        for joint, out in zip(self.joints, stat.joint, strict=False):
+            out.minPositionLimit = _finite_or_zero(joint.min_limit)
+            out.maxPositionLimit = _finite_or_zero(joint.max_limit)
+            out.maxFerror, out.minFerror = joint.max_ferror, joint.min_ferror
+            out.ferrorCurrent, out.ferrorHighMark = joint.ferror, joint.ferror_high_mark
+            out.output, out.input = joint.pos_cmd, joint.pos_fb
+            out.velocity = joint.vel_cmd
+            out.inpos = joint.is_in_position
+            out.homing, out.homed = joint.is_homing, joint.is_homed
+            out.fault = joint.is_faulted
+            out.enabled = self.is_enabled
+            out.maxHardLimit, out.minHardLimit = joint.is_on_pos_limit, joint.is_on_neg_limit
+            out.overrideLimits = self.is_override_limits
+            out.backlash = joint.backlash
+        for spindle, out in zip(self.spindles, stat.spindle, strict=False):
+            out.speed = spindle.speed
+            out.spindle_scale = spindle.scale
+            out.direction = (spindle.speed > 0) - (spindle.speed < 0)
+            out.brake = spindle.is_brake_on
+            out.enabled = spindle.speed != 0
+        stat.synch_do[: len(self.digital_out)] = self.digital_out
+        stat.synch_di[: len(self.digital_in)] = self.digital_in
+        stat.analog_output[: len(self.analog_out)] = self.analog_out
+        stat.analog_input[: len(self.analog_in)] = self.analog_in
+
+
+def _pose(pose: emc.EmcPose) -> EmcPose:
+    t = pose.tran
+    return EmcPose(t.x, t.y, t.z, pose.a, pose.b, pose.c, pose.u, pose.v, pose.w)
+
+
+def _store_pose(out: emc.EmcPose, pose: EmcPose) -> None:
+    out.tran.x, out.tran.y, out.tran.z = pose.x, pose.y, pose.z
+    out.a, out.b, out.c, out.u, out.v, out.w = pose.a, pose.b, pose.c, pose.u, pose.v, pose.w
+
+
+def _finite_or_zero(value: float) -> float:
+    return value if math.isfinite(value) else 0.0
+
+
+_HANDLERS: dict[type, Callable[[MotionController, emc.NMLmsg], str | None]] = {
+    emc.EMC_TRAJ_ENABLE: MotionController._enable,
+    emc.EMC_TRAJ_DISABLE: MotionController._disable,
+    emc.EMC_TRAJ_ABORT: MotionController._abort,
+    emc.EMC_MOTION_ABORT: MotionController._abort,
+    emc.EMC_TRAJ_SET_MODE: MotionController._set_mode,
+    emc.EMC_JOG_CONT: MotionController._jog,
+    emc.EMC_JOG_INCR: MotionController._jog,
+    emc.EMC_JOG_ABS: MotionController._jog,
+    emc.EMC_JOG_STOP: MotionController._jog,
+    emc.EMC_TRAJ_LINEAR_MOVE: MotionController._linear_move,
+    emc.EMC_TRAJ_CIRCULAR_MOVE: MotionController._circular_move,
+    emc.EMC_TRAJ_PROBE: MotionController._probe,
+    emc.EMC_TRAJ_CLEAR_PROBE_TRIPPED_FLAG: MotionController._clear_probe,
+    emc.EMC_TRAJ_SET_TERM_COND: MotionController._set_term_cond,
+    emc.EMC_TRAJ_SET_VELOCITY: MotionController._set_velocity,
+    emc.EMC_TRAJ_SET_ACCELERATION: MotionController._set_acceleration,
+    emc.EMC_TRAJ_SET_MAX_VELOCITY: MotionController._set_max_velocity,
+    emc.EMC_TRAJ_SET_MAX_ACCELERATION: MotionController._set_max_acceleration,
+    emc.EMC_TRAJ_SET_SCALE: MotionController._set_scale,
+    emc.EMC_TRAJ_SET_RAPID_SCALE: MotionController._set_rapid_scale,
+    emc.EMC_TRAJ_SET_MOTION_ID: MotionController._set_motion_id,
+    emc.EMC_TRAJ_PAUSE: MotionController._pause,
+    emc.EMC_TRAJ_RESUME: MotionController._resume,
+    emc.EMC_TRAJ_STEP: MotionController._step,
+    emc.EMC_JOINT_SET_MIN_POSITION_LIMIT: MotionController._joint_limits,
+    emc.EMC_JOINT_SET_MAX_POSITION_LIMIT: MotionController._joint_limits,
+    emc.EMC_JOINT_SET_MAX_VELOCITY: MotionController._joint_limits,
+    emc.EMC_JOINT_SET_FERROR: MotionController._joint_limits,
+    emc.EMC_JOINT_SET_MIN_FERROR: MotionController._joint_limits,
+    emc.EMC_JOINT_SET_BACKLASH: MotionController._joint_limits,
+    emc.EMC_JOINT_SET_MAX_ACCELERATION: MotionController._joint_limits,
+    emc.EMC_AXIS_SET_MIN_POSITION_LIMIT: MotionController._axis_settings,
+    emc.EMC_AXIS_SET_MAX_POSITION_LIMIT: MotionController._axis_settings,
+    emc.EMC_AXIS_SET_MAX_VELOCITY: MotionController._axis_settings,
+    emc.EMC_AXIS_SET_MAX_ACCELERATION: MotionController._axis_settings,
+    emc.EMC_JOINT_SET_HOMING_PARAMS: MotionController._homing_params,
+    emc.EMC_JOINT_HOME: MotionController._home,
+    emc.EMC_JOINT_UNHOME: MotionController._unhome,
+    emc.EMC_JOINT_OVERRIDE_LIMITS: MotionController._override_limits,
+    emc.EMC_MOTION_SET_DOUT: MotionController._set_dout,
+    emc.EMC_MOTION_SET_AOUT: MotionController._set_aout,
+    emc.EMC_SPINDLE_ON: MotionController._spindle,
+    emc.EMC_SPINDLE_OFF: MotionController._spindle,
+    emc.EMC_SPINDLE_BRAKE_ENGAGE: MotionController._spindle,
+    emc.EMC_SPINDLE_BRAKE_RELEASE: MotionController._spindle,
+    emc.EMC_TRAJ_SET_SPINDLE_SCALE: MotionController._spindle_scale,
+}
+
+__all__ = ["Inputs", "Joint", "MotionController"]

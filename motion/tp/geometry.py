@@ -1,0 +1,282 @@
+"""Path pieces of the coordinated planner: straight lines and circular/helical arcs in the
+nine-axis space X Y Z A B C U V W.
+
+Every piece is parametrised by its path length ``s`` in ``[0, length]``. For the per-axis
+limits each piece knows two bounds over its whole length (``axis_bounds``):
+
+- ``T[i] >= |dp_i/ds|``: axis speed is at most ``v * T[i]``;
+- ``N[i] >= |d2p_i/ds2|``: axis acceleration is at most ``a_t * T[i] + v**2 * N[i]``.
+
+From them the planner derives a speed cap and a tangential acceleration that keep every
+axis inside its velocity and acceleration limits at every point of the piece.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from motion.pose import NUM_AXES
+
+XYZ = slice(0, 3)
+ABC = slice(3, 6)
+UVW = slice(6, 9)
+EPS = 1e-9
+
+
+def path_length(delta: np.ndarray) -> float:
+    """LinuxCNC's rule for a move's length: XYZ if they move, else UVW, else ABC."""
+    for group in (XYZ, UVW, ABC):
+        length = math.sqrt(float(delta[group] @ delta[group]))
+        if length > EPS:
+            return length
+    return 0.0
+
+
+class Piece:
+    """Common state of a path piece; see ``LinePiece`` and ``ArcPiece``."""
+
+    __slots__ = (
+        "acc",
+        "acc_head",
+        "acc_tail",
+        "exit_max",
+        "is_kink_end",
+        "length",
+        "move",
+        "s0",
+        "v_body",
+        "v_exit",
+        "v_mid",
+        "vcap",
+        "vplan",
+        "window",
+    )
+
+    def __init__(self, move: object, length: float) -> None:
+        self.move = move
+        self.length = length
+        self.s0 = 0.0  # cumulative path position of the piece's start
+        self.vcap = 0.0  # speed cap from axis and move limits
+        self.vplan = 0.0  # speed the lookahead plans with (cap and highest feed)
+        self.acc = 0.0  # tangential acceleration available everywhere on the piece
+        self.exit_max = 0.0  # highest speed allowed at the junction with the next piece
+        self.v_exit = 0.0  # planned exit speed (lookahead result)
+        # A servo period that crosses from one piece into another can only use the lower
+        # of their accelerations. ``window`` is what one period can travel; the first and
+        # last ``window`` of the piece are planned with the lowest acceleration of the
+        # pieces a period may touch there (``acc_head``/``acc_tail``, set by the planner).
+        self.window = 0.0
+        self.acc_head = self.acc_tail = 0.0
+        self.v_mid = 0.0  # planned speed where the tail zone begins
+        self.v_body = 0.0  # planned speed where the head zone ends
+        self.is_kink_end = False  # passes an unblended, nearly tangent joint at speed
+
+    def apply_limits(
+        self,
+        max_acc: np.ndarray,
+        inv_vel: np.ndarray,
+        inv_acc: np.ndarray,
+        move_vel: float,
+        move_acc: float,
+        normal_fraction: float,
+    ) -> None:
+        """Set ``vcap`` and ``acc`` from the axis limits (see the module docstring);
+        ``inv_vel``/``inv_acc`` are the reciprocals of the axis limits.
+
+        At most ``normal_fraction`` of the acceleration budget goes to the centripetal part;
+        what the cap leaves unused is given to the tangential part."""
+        t, n = self.axis_bounds()
+        vcap = move_vel
+        worst = float((t * inv_vel).max())
+        if worst > 0:
+            vcap = min(vcap, 1.0 / worst)
+        worst = float((n * inv_acc).max())
+        if worst > 0:
+            vcap = min(vcap, math.sqrt(normal_fraction / worst))
+            spare = np.where(t > EPS, (max_acc - (vcap * vcap) * n) / np.maximum(t, EPS), np.inf)
+            acc = min(move_acc, float(spare.min()))
+        else:
+            worst = float((t * inv_acc).max())
+            acc = min(move_acc, 1.0 / worst) if worst > 0 else move_acc
+        self.vcap = max(vcap, 0.0)
+        self.acc = self.acc_head = self.acc_tail = max(acc, EPS)
+
+    def zones(self) -> tuple[float, float, float, float, float]:
+        """Planning zones: (head length, head acceleration, body length, tail length,
+        tail acceleration); the body uses ``acc``. A piece shorter than two windows is
+        all tail, at the lowest of the three accelerations."""
+        length, window = self.length, self.window
+        if length < 2.0 * window:
+            lowest = min(self.acc_head, self.acc, self.acc_tail)
+            return 0.0, lowest, 0.0, length, lowest
+        return (
+            window,
+            min(self.acc_head, self.acc),
+            length - 2.0 * window,
+            window,
+            min(self.acc, self.acc_tail),
+        )
+
+    # implemented by subclasses
+    def point(self, s: float) -> np.ndarray:
+        raise NotImplementedError
+
+    def tangent(self, s: float) -> np.ndarray:
+        raise NotImplementedError
+
+    def axis_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        raise NotImplementedError
+
+
+class LinePiece(Piece):
+    __slots__ = ("direction", "full_length", "start")
+
+    def __init__(self, move: object, start: np.ndarray, end: np.ndarray) -> None:
+        delta = end - start
+        length = path_length(delta)
+        super().__init__(move, length)
+        self.start = start.copy()
+        self.direction = delta / length if length > 0 else np.zeros(NUM_AXES)
+        self.full_length = length  # before blends trimmed it
+
+    @property
+    def end(self) -> np.ndarray:
+        return self.start + self.direction * self.length
+
+    def is_single_group(self) -> bool:
+        """True when the path length is the full 9-D length (only one axis group moves),
+        which is when a tangent blend arc in 9-D keeps the feed meaning intact."""
+        return abs(float(self.direction @ self.direction) - 1.0) < 1e-9
+
+    def point(self, s: float) -> np.ndarray:
+        return self.start + self.direction * s
+
+    def tangent(self, s: float) -> np.ndarray:
+        return self.direction
+
+    def axis_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        return np.abs(self.direction), np.zeros(NUM_AXES)
+
+    def trim_start(self, d: float) -> None:
+        self.start = self.start + self.direction * d
+        self.length -= d
+
+    def trim_end(self, d: float) -> None:
+        self.length -= d
+
+
+class ArcPiece(Piece):
+    """p(phi) = centre + r(phi) (cos(phi) e1 + sin(phi) e2) + h phi, r(phi) = r0 + dr phi,
+    with phi = s * k. ``e1``/``e2`` are orthonormal 9-D vectors; ``h`` carries the helix
+    (motion along the normal) and the linear motion of the other axes, per radian."""
+
+    __slots__ = ("centre", "dr", "e1", "e2", "h", "k", "r0", "theta")
+
+    def __init__(
+        self,
+        move: object,
+        centre: np.ndarray,
+        e1: np.ndarray,
+        e2: np.ndarray,
+        r0: float,
+        r1: float,
+        theta: float,
+        h: np.ndarray,
+    ) -> None:
+        dr = (r1 - r0) / theta
+        rmean = 0.5 * (r0 + r1)
+        # length by the XYZ (else UVW, else ABC) rule applied to the tangent magnitude
+        per_radian = 0.0
+        for g in (XYZ, UVW, ABC):
+            plane2 = float(e1[g] @ e1[g])
+            per_radian = math.sqrt((rmean * rmean + dr * dr) * plane2 + float(h[g] @ h[g]))
+            if per_radian > EPS:
+                break
+        super().__init__(move, per_radian * theta)
+        self.centre, self.e1, self.e2, self.h = centre, e1, e2, h
+        self.r0, self.dr, self.theta = r0, dr, theta
+        self.k = theta / self.length if self.length > 0 else 0.0
+
+    def point(self, s: float) -> np.ndarray:
+        phi = s * self.k
+        r = self.r0 + self.dr * phi
+        return (
+            self.centre
+            + (r * math.cos(phi)) * self.e1
+            + (r * math.sin(phi)) * self.e2
+            + (self.h * phi)
+        )
+
+    def tangent(self, s: float) -> np.ndarray:
+        phi = s * self.k
+        r = self.r0 + self.dr * phi
+        c, sn = math.cos(phi), math.sin(phi)
+        dp = self.dr * (c * self.e1 + sn * self.e2) + r * (c * self.e2 - sn * self.e1) + self.h
+        return dp * self.k
+
+    def axis_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        rmax = max(self.r0, self.r0 + self.dr * self.theta)
+        plane = np.sqrt(self.e1 * self.e1 + self.e2 * self.e2)
+        t = ((abs(self.dr) + rmax) * plane + np.abs(self.h)) * self.k
+        n = (2 * abs(self.dr) + rmax) * plane * self.k * self.k
+        return t, n
+
+
+def circle_piece(
+    move: object,
+    start: np.ndarray,
+    end: np.ndarray,
+    centre: np.ndarray,
+    normal: np.ndarray,
+    turns: int,
+) -> ArcPiece:
+    """The arc of an EMC_TRAJ_CIRCULAR_MOVE: centre and normal in XYZ, counter-clockwise
+    about the normal, ``turns`` extra full turns; the other axes move linearly."""
+    nrm = float(np.linalg.norm(normal))
+    if not nrm > EPS:
+        raise ValueError("circle normal vector is zero")
+    nhat = normal / nrm
+    rel0 = start[XYZ] - centre
+    rel1 = end[XYZ] - centre
+    axial0 = float(rel0 @ nhat)
+    axial1 = float(rel1 @ nhat)
+    p0 = rel0 - axial0 * nhat
+    p1 = rel1 - axial1 * nhat
+    r0 = float(np.linalg.norm(p0))
+    r1 = float(np.linalg.norm(p1))
+    if r0 < 1e-7 or r1 < 1e-7:
+        raise ValueError("circle start or end lies on the centre (zero radius)")
+    e1x = p0 / r0
+    e2x = np.cross(nhat, e1x)
+    angle = math.atan2(float(p1 @ e2x), float(p1 @ e1x))
+    if angle <= 1e-12:
+        angle += 2 * math.pi  # same start and end: one full turn, like LinuxCNC
+    theta = angle + 2 * math.pi * int(turns)
+    e1 = np.zeros(NUM_AXES)
+    e2 = np.zeros(NUM_AXES)
+    e1[XYZ], e2[XYZ] = e1x, e2x
+    centre9 = start.copy()
+    centre9[XYZ] = centre + axial0 * nhat
+    h = (end - start) / theta
+    h[XYZ] = (axial1 - axial0) * nhat / theta
+    return ArcPiece(move, centre9, e1, e2, r0, r1, theta, h)
+
+
+def blend_arc(
+    move: object,
+    corner: np.ndarray,
+    u1: np.ndarray,
+    u2: np.ndarray,
+    radius: float,
+    turn: float,
+) -> ArcPiece:
+    """The tangent arc of ``radius`` between a line arriving along ``u1`` and one leaving
+    along ``u2`` at ``corner``, turning by ``turn`` radians."""
+    d = radius * math.tan(0.5 * turn)
+    inward = u2 - math.cos(turn) * u1
+    inward /= np.linalg.norm(inward)
+    start = corner - u1 * d
+    centre = start + inward * radius
+    return ArcPiece(move, centre, -inward, u1.copy(), radius, radius, turn, np.zeros(NUM_AXES))

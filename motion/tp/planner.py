@@ -1,0 +1,629 @@
+"""The default coordinated-mode trajectory planner (MOT-017, MOT-037..041, MOT-053..057).
+
+Moves (LINE, CIRCLE, PROBE) are queued in the cartesian frame. Each move becomes one or
+more path pieces (``geometry``); under G64 the corner between two lines is replaced by a
+tangent arc that stays within the P tolerance, so the path has no velocity jumps and its
+speed is limited only by the axis limits (speed cap and tangential acceleration per piece).
+
+Lookahead: every appended piece runs a backward pass that raises the planned exit speeds
+of the pieces before it as far as braking allows (the queue tail always ends at rest). It
+stops as soon as a speed does not change, so each append costs a few pieces, not the queue.
+
+Servo period (``step``): the path speed follows the cap with bounded acceleration and
+brakes onto the planned exit speeds, onto feed changes ahead (feed differs per move and
+overrides change at any time) and onto requested stops (pause, step, abort, probe trip).
+Integration is trapezoidal, so the discrete braking distance equals the planned one.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from collections import deque
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from motion.free import braking_speed, check_finite, check_positive
+from motion.pose import NUM_AXES, EmcPose
+from motion.tp.geometry import EPS, ArcPiece, LinePiece, Piece, blend_arc, circle_piece
+
+# Part of the acceleration budget a curved piece may use for centripetal acceleration.
+NORMAL_FRACTION = 0.5
+# Per-axis velocity change allowed at an unblended kink, as a fraction of max_acc * period.
+KINK_FRACTION = 0.45
+# Fraction of the axis acceleration limits the planner plans with.
+ACC_MARGIN = 0.995
+# Largest blend deviation as a fraction of the shorter line (G64 without P).
+TOLERANCE_FRACTION = 0.25
+# Largest per-axis change of the unit tangent passed without stopping (about 3 degrees).
+KINK_MAX_JUMP = 0.05
+# Angle below which two lines count as collinear (no blend needed).
+COLLINEAR_ANGLE = 1e-7
+# Turns sharper than this (almost a reversal) are not blended: the joint stops instead.
+MAX_BLEND_TURN = math.pi - 1e-3
+
+
+class TermCond(enum.IntEnum):
+    """End-of-move behaviour (LinuxCNC TC_TERM_COND_*)."""
+
+    STOP = 1  # G61: come to rest at the end of the move
+    EXACT = 2  # G61.1: follow the path exactly; corners slow down to what they allow
+    BLEND = 3  # G64: blend corners within the tolerance
+
+
+class ProbeType(enum.IntEnum):
+    """Which probe edge ends a probe move (G38.2/3: contact, G38.4/5: loss of contact)."""
+
+    TOWARD = 2
+    AWAY = 4
+
+
+@dataclass(slots=True, eq=False)
+class Move:
+    """One queued command; the pieces point back to it."""
+
+    motion_id: int
+    vel: float
+    is_rapid: bool
+    term: TermCond
+    tolerance: float
+    end_s: float = 0.0  # cumulative path position of the move's end
+    probe: ProbeType | None = None
+    line: LinePiece | None = None  # the move's line piece when it is a line (for blending)
+
+
+class TrajectoryPlanner:
+    """Coordinated-mode planner; drive it with ``step()`` once per servo period.
+
+    Limits: ``axis_max_vel``/``axis_max_acc`` are 9 values (X..W, ``[AXIS_L]``; use ``inf``
+    for absent axes), ``max_vel``/``max_acc`` the ``[TRAJ]`` limits of the path.
+    """
+
+    def __init__(
+        self,
+        axis_max_vel: Sequence[float],
+        axis_max_acc: Sequence[float],
+        cycle_time: float = 0.001,
+        max_vel: float = math.inf,
+        max_acc: float = math.inf,
+        queue_size: int = 2000,
+        max_feed_scale: float = 1.0,
+    ) -> None:
+        self.set_limits(axis_max_vel, axis_max_acc, max_vel, max_acc)
+        self.cycle_time = check_positive("cycle time", cycle_time)
+        if queue_size < 2:
+            raise ValueError(f"queue size must be at least 2, got {queue_size}")
+        self.queue_size = queue_size
+        # lookahead plans corner and braking speeds for feed overrides up to this one
+        # ([DISPLAY]MAX_FEED_OVERRIDE); above it, overrides act between those points only
+        self.max_feed_scale = check_positive("max feed scale", max_feed_scale)
+        self.feed_scale = 1.0
+        self.rapid_scale = 1.0
+        self.probe_input = False  # set by the caller every period
+        self.motion_id = 0
+        self.probe_tripped = False
+        self.probe_pos = np.zeros(NUM_AXES)
+        self.error: str | None = None  # taken by the caller with take_error()
+        self._reset_queue(np.zeros(NUM_AXES))
+
+    # ------------------------------------------------------------------ configuration
+    def set_limits(
+        self,
+        axis_max_vel: Sequence[float],
+        axis_max_acc: Sequence[float],
+        max_vel: float = math.inf,
+        max_acc: float = math.inf,
+    ) -> None:
+        vel = np.array(axis_max_vel, dtype=float)
+        acc = np.array(axis_max_acc, dtype=float)
+        if vel.shape != (NUM_AXES,) or acc.shape != (NUM_AXES,):
+            raise ValueError(f"axis limits need {NUM_AXES} values each (X Y Z A B C U V W)")
+        if np.isnan(vel).any() or np.isnan(acc).any() or (vel <= 0).any() or (acc <= 0).any():
+            raise ValueError("axis velocity and acceleration limits must be positive numbers")
+        if math.isnan(max_vel) or math.isnan(max_acc) or max_vel <= 0 or max_acc <= 0:
+            raise ValueError("trajectory velocity and acceleration limits must be positive")
+        self.axis_max_vel, self.axis_max_acc = vel, acc
+        # plan slightly inside the acceleration limits: a period that straddles two pieces
+        # mixes their accelerations (see step)
+        self._plan_acc = acc * ACC_MARGIN
+        self._inv_vel, self._inv_acc = 1.0 / vel, 1.0 / self._plan_acc  # 0: unlimited axis
+        self.max_vel, self.max_acc = float(max_vel), float(max_acc)
+
+    def _reset_queue(self, pos: np.ndarray) -> None:
+        """Empty queue, at rest at ``pos``; probe results and the last motion id stay."""
+        self._pieces: list[Piece] = []
+        self._head = 0  # index of the piece being executed
+        self._moves: deque[Move] = deque()
+        self._feed_points: deque[tuple[float, Move]] = deque()  # feed changes ahead
+        self._end = pos.copy()  # where the next queued move starts
+        self._s = 0.0  # position within the current piece
+        self.pos = pos.copy()
+        self.vel = 0.0
+        self._is_stopping = False
+        self._is_aborting = False
+        self._step_end: float | None = None  # cumulative position where STEP stops
+        self._probe_armed = False
+        self.is_paused = False
+        self.distance_to_go = 0.0
+
+    def set_position(self, pose: EmcPose | Sequence[float]) -> None:
+        """Start from ``pose`` with an empty queue (entering coord mode, MOT-029)."""
+        pos = np.array(list(pose), dtype=float)
+        if pos.shape != (NUM_AXES,) or not np.isfinite(pos).all():
+            raise ValueError(f"position needs {NUM_AXES} finite values")
+        self._reset_queue(pos)
+
+    # ------------------------------------------------------------------ status
+    @property
+    def queue_depth(self) -> int:
+        return len(self._moves)
+
+    @property
+    def free_slots(self) -> int:
+        return self.queue_size - len(self._moves)
+
+    @property
+    def is_full(self) -> bool:
+        return len(self._moves) >= self.queue_size
+
+    @property
+    def is_done(self) -> bool:
+        """Queue empty and at rest."""
+        return not self._moves and self.vel == 0.0
+
+    @property
+    def pose(self) -> EmcPose:
+        return EmcPose(*self.pos.tolist())
+
+    def set_feed_scale(self, scale: float) -> None:
+        """Feed override (MOT-040/041); applies at once, with bounded acceleration."""
+        self.feed_scale = _check_scale(scale)
+
+    def set_rapid_scale(self, scale: float) -> None:
+        self.rapid_scale = _check_scale(scale)
+
+    # ------------------------------------------------------------------ queueing
+    def add_line(
+        self,
+        end: Sequence[float],
+        vel: float,
+        ini_maxvel: float,
+        acc: float,
+        motion_id: int = 0,
+        term: TermCond = TermCond.BLEND,
+        tolerance: float = 0.0,
+        is_rapid: bool = False,
+        probe: ProbeType | None = None,
+    ) -> None:
+        """Queue a straight move to ``end`` (SET_LINE, MOT-053)."""
+        end_v = self._check_target(end)
+        move = self._new_move(motion_id, vel, ini_maxvel, acc, term, tolerance, is_rapid, probe)
+        piece = LinePiece(move, self._end, end_v)
+        if piece.length <= EPS:
+            return  # nothing to do: LinuxCNC drops zero-length moves too
+        move.line = piece
+        self._append(move, piece, ini_maxvel, acc)
+
+    def add_probe(
+        self,
+        end: Sequence[float],
+        vel: float,
+        ini_maxvel: float,
+        acc: float,
+        motion_id: int = 0,
+        probe: ProbeType = ProbeType.TOWARD,
+    ) -> None:
+        """Queue a probe move (PROBE, MOT-056): it stops on the probe edge, records the
+        position and empties the queue. The tripped flag is cleared here (MOT-057)."""
+        self.probe_tripped = False
+        self.add_line(end, vel, ini_maxvel, acc, motion_id, TermCond.STOP, probe=probe)
+
+    def add_circle(
+        self,
+        end: Sequence[float],
+        centre: Sequence[float],
+        normal: Sequence[float],
+        turns: int,
+        vel: float,
+        ini_maxvel: float,
+        acc: float,
+        motion_id: int = 0,
+        term: TermCond = TermCond.BLEND,
+        tolerance: float = 0.0,
+    ) -> None:
+        """Queue an arc or helix (SET_CIRCLE, MOT-054): counter-clockwise about ``normal``
+        through ``centre`` (XYZ), plus ``turns`` full turns; A B C U V W move linearly."""
+        end_v = self._check_target(end)
+        centre_v = np.array(centre, dtype=float)
+        normal_v = np.array(normal, dtype=float)
+        if centre_v.shape != (3,) or normal_v.shape != (3,):
+            raise ValueError("circle centre and normal need 3 values (X Y Z)")
+        if not (np.isfinite(centre_v).all() and np.isfinite(normal_v).all()):
+            raise ValueError("circle centre and normal must be finite")
+        if int(turns) != turns or turns < 0:
+            raise ValueError(f"circle turns must be a whole number >= 0, got {turns}")
+        move = self._new_move(motion_id, vel, ini_maxvel, acc, term, tolerance, False, None)
+        piece = circle_piece(move, self._end, end_v, centre_v, normal_v, int(turns))
+        self._append(move, piece, ini_maxvel, acc)
+
+    def _check_target(self, end: Sequence[float]) -> np.ndarray:
+        if self.is_full:
+            raise OverflowError("trajectory queue is full")
+        end_v = np.array(list(end), dtype=float)
+        if end_v.shape != (NUM_AXES,):
+            raise ValueError(f"target needs {NUM_AXES} values (X Y Z A B C U V W)")
+        if not np.isfinite(end_v).all():
+            raise ValueError(f"target is not finite: {end_v.tolist()}")
+        return end_v
+
+    def _new_move(self, motion_id, vel, ini_maxvel, acc, term, tolerance, is_rapid, probe) -> Move:
+        check_positive("velocity", vel)
+        check_positive("max velocity", ini_maxvel)
+        check_positive("acceleration", acc)
+        tolerance = check_finite("blend tolerance", tolerance)
+        if tolerance < 0:
+            raise ValueError(f"blend tolerance must be >= 0, got {tolerance}")
+        return Move(
+            int(motion_id), float(vel), bool(is_rapid), TermCond(term), tolerance, probe=probe
+        )
+
+    def _piece_limits(self, piece: Piece, ini_maxvel: float, acc: float) -> None:
+        """Speed cap and acceleration of a piece; its planning speed is the cap or the
+        move's velocity at the highest feed override, whichever is lower."""
+        piece.apply_limits(
+            self._plan_acc,
+            self._inv_vel,
+            self._inv_acc,
+            min(ini_maxvel, self.max_vel),
+            min(acc, self.max_acc) * ACC_MARGIN,
+            NORMAL_FRACTION,
+        )
+        move = piece.move
+        highest = move.vel * (1.0 if move.is_rapid else self.max_feed_scale)
+        piece.vplan = min(piece.vcap, highest)
+
+    def _append(self, move: Move, piece: Piece, ini_maxvel: float, acc: float) -> None:
+        self._piece_limits(piece, ini_maxvel, acc)
+        first_changed = len(self._pieces)
+        prev_move = self._moves[-1] if self._moves else None
+        tail = self._pieces[-1] if len(self._pieces) > self._head else None
+        if tail is not None and prev_move is not None:
+            first_changed = self._join(prev_move, tail, move, piece)
+        last = self._pieces[-1] if self._pieces else None
+        piece.s0 = last.s0 + last.length if last is not None else 0.0
+        first_changed = min(first_changed, self._link(piece))  # the queue ends at rest
+        move.end_s = piece.s0 + piece.length
+        if prev_move is None or (prev_move.vel, prev_move.is_rapid) != (move.vel, move.is_rapid):
+            self._feed_points.append((piece.s0, move))
+        self._moves.append(move)
+        self._end = piece.end if isinstance(piece, LinePiece) else piece.point(piece.length)
+        self._backward_pass(first_changed)
+
+    def _join(self, prev_move: Move, tail: Piece, move: Move, piece: Piece) -> int:
+        """Set the junction between the queue tail and a new piece: a blend arc under G64
+        when both are lines, else a speed limit at the corner. Returns the index of the
+        first piece whose planning data changed."""
+        index = len(self._pieces) - 1
+        if prev_move.term == TermCond.STOP or prev_move.probe is not None:
+            return index  # exact stop: exit stays 0
+        if (
+            prev_move.term == TermCond.BLEND
+            and isinstance(tail, LinePiece)
+            and isinstance(piece, LinePiece)
+            and tail is prev_move.line
+            and tail.is_single_group()
+            and piece.is_single_group()
+        ):
+            arc = self._blend(prev_move, tail, piece)
+            if arc is not None:
+                arc.s0 = tail.s0 + tail.length
+                tail.exit_max = min(tail.vplan, arc.vplan)
+                arc.exit_max = min(arc.vplan, piece.vplan)
+                index = min(index, self._link(arc))
+                prev_move.end_s = arc.s0 + arc.length
+                return index
+        tail.exit_max = self._kink_speed(tail, piece)
+        if tail.is_kink_end:  # the period crossing the joint keeps 1 - KINK_FRACTION
+            tail.acc_tail = min(tail.acc_tail, tail.acc * (1.0 - KINK_FRACTION))
+            piece.acc_head = min(piece.acc_head, piece.acc * (1.0 - KINK_FRACTION))
+        return index
+
+    def _blend(self, move: Move, line1: LinePiece, line2: LinePiece) -> ArcPiece | None:
+        """Replace the corner between two lines by a tangent arc, or None if not possible."""
+        cos_turn = float(line1.direction @ line2.direction)
+        turn = math.acos(max(-1.0, min(1.0, cos_turn)))
+        if turn < COLLINEAR_ANGLE or turn > MAX_BLEND_TURN:
+            return None  # collinear: nothing to blend; reversal: stop at the corner
+        # an arc may use up to half of each line, so that neighbouring arcs never overlap
+        avail = min(0.5 * line1.full_length, line1.length, 0.5 * line2.length)
+        is_running = bool(self._pieces) and line1 is self._pieces[self._head]
+        if is_running:  # not the part this period is about to travel
+            avail = min(avail, line1.length - self._s - 2 * self.vel * self.cycle_time)
+        if avail <= 1e-9:
+            return None
+        # the arc's distance from the corner stays within G64 P, and within a quarter of
+        # either line's length when P is absent or larger (as LinuxCNC does)
+        tolerance = TOLERANCE_FRACTION * min(line1.full_length, line2.full_length)
+        if move.tolerance > 0:
+            tolerance = min(tolerance, move.tolerance)
+        tan_half = math.tan(0.5 * turn)
+        cos_half = math.cos(0.5 * turn)
+        radius = min(avail / tan_half, tolerance * cos_half / (1.0 - cos_half))
+        v_full = min(line1.vplan, line2.vplan)
+        d = radius * tan_half
+        if d <= 1e-9:
+            return None
+        arc = blend_arc(move, line1.end, line1.direction, line2.direction, radius, turn)
+        self._piece_limits(arc, v_full, min(line1.acc, line2.acc))
+        speed = min(v_full, move.vel, line2.move.vel)
+        if not _is_blend_faster(speed, arc, 2 * d, min(line1.acc, line2.acc)):
+            return None
+        if is_running:  # the runtime must still be able to brake onto the arc's speed
+            room = line1.length - d - self._s - self.vel * self.cycle_time
+            if self.vel * self.vel > arc.vcap**2 + 2 * line1.acc * max(room, 0.0):
+                return None
+        line1.trim_end(d)
+        line2.trim_start(d)
+        return arc
+
+    def _kink_speed(self, tail: Piece, piece: Piece) -> float:
+        """Speed at an unblended junction. A corner (direction change above
+        ``KINK_MAX_JUMP``) is passed at rest. A nearly tangent joint may be passed at the
+        speed whose per-axis velocity jump stays below ``KINK_FRACTION`` of what the axis
+        can change in one period; the period that crosses it keeps the rest (see step)."""
+        jump = np.abs(piece.tangent(0.0) - tail.tangent(tail.length))
+        v = min(tail.vplan, piece.vplan)
+        if float(jump.max()) > KINK_MAX_JUMP:
+            return 0.0
+        moving = jump > 1e-12
+        if moving.any():
+            budget = KINK_FRACTION * self._plan_acc[moving] * self.cycle_time
+            v = min(v, float(np.min(budget / jump[moving])))
+            tail.is_kink_end = True
+        return v
+
+    def _link(self, piece: Piece) -> int:
+        """Append ``piece``; returns the index of the first piece whose plan changed.
+        Lowers ``acc_tail`` of the pieces from which one period can reach the new piece,
+        and the new piece's ``acc_head`` likewise (see ``Piece.zones``)."""
+        dt = self.cycle_time
+        piece.window = (piece.vcap + piece.acc * dt) * dt
+        pieces = self._pieces
+        first = len(pieces)
+        gap = 0.0  # from the end of piece j to the start of the new piece
+        for j in range(len(pieces) - 1, self._head - 1, -1):
+            prev = pieces[j]
+            if gap > prev.window:
+                break
+            if piece.acc < prev.acc_tail:
+                prev.acc_tail = piece.acc
+                first = j
+            piece.acc_head = min(piece.acc_head, prev.acc)
+            gap += prev.length
+        pieces.append(piece)
+        return first
+
+    def _backward_pass(self, first_changed: int) -> None:
+        """Raise planned exit speeds from the tail back while they change (lookahead)."""
+        pieces = self._pieces
+        v_next_entry = 0.0  # the tail ends at rest
+        sqrt = math.sqrt
+        for i in range(len(pieces) - 1, self._head - 1, -1):
+            p = pieces[i]
+            v_exit = p.exit_max if p.exit_max < v_next_entry else v_next_entry
+            if i < first_changed and v_exit == p.v_exit:
+                break
+            p.v_exit = v_exit
+            head, acc_head, body, tail, acc_tail = p.zones()
+            p.v_mid = sqrt(v_exit * v_exit + 2.0 * acc_tail * tail)
+            p.v_body = sqrt(p.v_mid * p.v_mid + 2.0 * p.acc * body)
+            v_next_entry = sqrt(p.v_body * p.v_body + 2.0 * acc_head * head)
+            if v_next_entry > p.vplan:
+                v_next_entry = p.vplan
+
+    # ------------------------------------------------------------------ commands
+    def pause(self) -> None:
+        """Feed hold: decelerate along the path and stay there (MOT-037)."""
+        self._is_stopping = True
+
+    def resume(self) -> None:
+        """Continue exactly from where the pause stopped (MOT-038)."""
+        if self._is_aborting:
+            return
+        self._is_stopping = False
+        self._step_end = None
+        self.is_paused = False
+
+    def step_once(self) -> None:
+        """STEP (MOT-039): run to the end of the current move, then pause again."""
+        if not self._moves or self._is_aborting:
+            return
+        self._step_end = self._moves[0].end_s
+        self._is_stopping = False
+        self.is_paused = False
+
+    def abort(self) -> None:
+        """Decelerate along the path, then drop every queued move (MOT-022). Idempotent."""
+        if not self._moves or self.vel == 0.0:
+            self._reset_queue(self.pos)
+            return
+        self._is_stopping = True
+        self._is_aborting = True
+
+    def clear_probe_flag(self) -> None:
+        """CLEAR_PROBE_FLAG (MOT-057)."""
+        self.probe_tripped = False
+
+    def take_error(self) -> str | None:
+        """The last error message (a probe that did not trip...), cleared by reading."""
+        error, self.error = self.error, None
+        return error
+
+    # ------------------------------------------------------------------ servo period
+    def step(self) -> np.ndarray:
+        """Advance one servo period; returns the commanded 9-axis position."""
+        if not self._moves:
+            self.vel = 0.0
+            return self.pos
+        dt = self.cycle_time
+        pieces = self._pieces
+        p = pieces[self._head]
+        move = p.move
+        self._check_probe(move)
+        if not self._moves:  # the probe check aborted a move that had not started
+            return self.pos
+        v = self.vel
+        acc = p.acc
+        if self._is_stopping:
+            self._advance(0.5 * (v + max(v - acc * dt, 0.0)) * dt, max(v - acc * dt, 0.0))
+            return self.pos
+        scale = self.rapid_scale if move.is_rapid else self.feed_scale
+        v_new = min(move.vel * scale, p.vcap)
+        s_here = p.s0 + self._s
+        # Every piece this period may reach limits the speed with its cap and with its
+        # braking curve onto its planned exit. The plan is consistent piece by piece (each
+        # exit can be reached from the previous one at that piece's acceleration), so the
+        # curves of farther pieces need not be checked.
+        reach = s_here + (v + acc * dt) * dt
+        a_low = acc  # the lowest acceleration of the pieces touched this period
+        is_kink_step = False
+        v_top = v_new
+        j = self._head
+        n_pieces = len(pieces)
+        while j < n_pieces:
+            q = pieces[j]
+            q_end = q.s0 + q.length
+            a_low = min(a_low, q.acc)
+            v_new = min(v_new, q.vcap)
+            if q.v_exit < v_top:
+                v_new = min(v_new, _piece_braking(q, q_end - s_here, v, dt))
+            if q.is_kink_end and q_end < reach:
+                is_kink_step = True
+            if q_end >= reach or q.v_exit <= 0.0:
+                break
+            j += 1
+        # feed changes ahead (per-move feed and the overrides as they are now)
+        feed_points = self._feed_points
+        while feed_points and feed_points[0][0] <= s_here:
+            feed_points.popleft()
+        horizon = v * v / acc + 2.0 * v * dt + 1e-9  # farther changes cannot matter yet
+        for s_feed, ahead in feed_points:
+            if s_feed - s_here > horizon:
+                break
+            ahead_scale = self.rapid_scale if ahead.is_rapid else self.feed_scale
+            v_new = min(v_new, braking_speed(s_feed - s_here, v, acc, dt, ahead.vel * ahead_scale))
+        if self._step_end is not None:
+            v_new = min(v_new, braking_speed(self._step_end - s_here, v, acc, dt))
+        if is_kink_step:  # the joint's velocity jump takes KINK_FRACTION of the budget
+            a_low *= 1.0 - KINK_FRACTION
+        v_new = max(min(v_new, v + a_low * dt), v - a_low * dt, 0.0)
+        self._advance(0.5 * (v + v_new) * dt, v_new)
+        return self.pos
+
+    def _is_stop_point(self, p: Piece) -> bool:
+        if p.v_exit <= 0.0:
+            return True
+        return self._step_end is not None and p.s0 + p.length >= self._step_end - 1e-9
+
+    def _advance(self, ds: float, v_new: float) -> None:
+        pieces = self._pieces
+        p = pieces[self._head]
+        s = self._s + ds
+        while True:
+            if self._is_stop_point(p) and s >= p.length - 1e-12:
+                s, v_new = p.length, 0.0  # arrival at a stop: the last fraction of a period
+                break
+            if s < p.length:
+                break
+            s -= p.length
+            p = self._next_piece(p)
+        if v_new == 0.0 and s >= p.length:
+            if self._step_end is not None and p.s0 + p.length >= self._step_end - 1e-9:
+                self._step_end = None
+                self._is_stopping = True  # STEP done: paused at the end of the move
+            if self._head + 1 >= len(pieces):
+                self._finish_move(p.move)
+                self._reset_queue(p.point(p.length))
+                return
+            p = self._next_piece(p)  # at rest on a vertex: the next period starts the next piece
+            s = 0.0
+        self._s = s
+        self.vel = v_new
+        self.pos = p.point(s)
+        self.motion_id = p.move.motion_id
+        self.distance_to_go = max(p.move.end_s - (p.s0 + s), 0.0)
+        if v_new == 0.0 and self._is_stopping:
+            if self._is_aborting:
+                self._reset_queue(self.pos)
+            else:
+                self.is_paused = True
+        if self._head > 512:
+            del pieces[: self._head]
+            self._head = 0
+
+    def _next_piece(self, p: Piece) -> Piece:
+        nxt = self._pieces[self._head + 1]
+        if nxt.move is not p.move:
+            self._finish_move(p.move)
+        self._head += 1
+        return nxt
+
+    def _finish_move(self, move: Move) -> None:
+        if self._moves and self._moves[0] is move:
+            self._moves.popleft()
+            self._probe_armed = False
+            if move.probe is not None and not self.probe_tripped:
+                self.error = "probe move finished without the probe tripping"
+
+    def _check_probe(self, move: Move) -> None:
+        if move.probe is None or self._is_stopping:
+            return
+        is_contact = bool(self.probe_input)
+        wanted = move.probe == ProbeType.TOWARD
+        if not self._probe_armed:
+            self._probe_armed = True
+            if is_contact == wanted:
+                self.error = "probe is already in the trip state when the probe move starts"
+                self.abort()
+            return
+        if is_contact == wanted:
+            self.probe_tripped = True
+            self.probe_pos = self.pos.copy()
+            self.abort()
+
+
+def _piece_braking(q: Piece, dist: float, v: float, dt: float) -> float:
+    """Highest next speed that can still reach the planned exit of ``q``, ``dist`` ahead,
+    along the curve the lookahead planned zone by zone (``Piece.zones``)."""
+    _head, acc_head, body, tail, acc_tail = q.zones()
+    if dist <= tail:
+        return braking_speed(dist, v, acc_tail, dt, q.v_exit)
+    dist -= tail
+    if dist <= body:
+        return braking_speed(dist, v, q.acc, dt, q.v_mid)
+    return braking_speed(dist - body, v, acc_head, dt, q.v_body)
+
+
+def _is_blend_faster(speed: float, arc: ArcPiece, cut: float, acc: float) -> bool:
+    """Whether passing a corner on ``arc`` costs less time than stopping at it, counted
+    against cruising at ``speed`` over the ``cut`` of line length the arc replaces: a stop
+    loses speed/acc; the arc loses the slowdown to its own speed and back, plus its length
+    at that speed, minus the shortcut. (A tiny tolerance on a sharp corner makes a slow
+    arc, and stopping exactly on the corner is then faster.)"""
+    w = min(arc.vcap, speed)
+    if w <= 0:
+        return False
+    slowdown = (speed - w) ** 2 / (acc * speed) + arc.length / w - cut / speed
+    return slowdown < speed / acc
+
+
+def _check_scale(scale: float) -> float:
+    scale = check_finite("scale", scale)
+    if scale < 0:
+        raise ValueError(f"scale must be >= 0, got {scale}")
+    return scale
+
+
+Planner = TrajectoryPlanner
