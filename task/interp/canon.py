@@ -58,6 +58,8 @@ class Canon(Protocol):
     def STRAIGHT_PROBE(self, line: int, x: float, y: float, z: float, a: float, b: float,
                        c: float, u: float, v: float, w: float, probe_type: int) -> None: ...
     def RIGID_TAP(self, line: int, x: float, y: float, z: float, scale: float) -> None: ...
+    def NURBS_FEED(self, line: int, points: list[tuple[float, float, float]],
+                   order: int) -> None: ...
     def DWELL(self, seconds: float) -> None: ...
     def SET_FEED_MODE(self, spindle: int, mode: int) -> None: ...
     def SET_FEED_RATE(self, rate: float) -> None: ...
@@ -312,6 +314,12 @@ class PrintingCanon:
             pos[1] = y + backoff * (dy / distance)
             pos[2] = z + backoff * (dz / distance)
         pos[3], pos[4], pos[5] = a, b, c
+
+    def NURBS_FEED(self, line, points: list[tuple[float, float, float]], order: int) -> None:
+        """G5/G5.1/G5.2: saicanon prints only the number of control points."""
+        self.emit(f"NURBS_FEED({len(points)}, ...)")
+        # saicanon reads the point one past the end (undefined); the last one is our guess
+        self.position[0], self.position[1] = points[-1][0], points[-1][1]
 
     def RIGID_TAP(self, line, x, y, z, scale) -> None:
         self.emit(f"RIGID_TAP({x:.4f}, {y:.4f}, {z:.4f})")

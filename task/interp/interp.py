@@ -26,6 +26,8 @@ from .block import (
     G_2,
     G_3,
     G_4,
+    G_5,
+    G_5_1,
     G_5_2,
     G_5_3,
     G_7,
@@ -192,6 +194,8 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin, CompMixin):
         self.lazy_closing = False
         self.qc: list = []  # cutter compensation: moves (and calls) held back
         self._qc_stale_front = None
+        self.nurbs_points: list[tuple[float, float, float]] = []
+        self.nurbs_order = 3
         self.endpoint = [0.0, 0.0]
         self.endpoint_valid = False
         self._fast = None  # a line taken by the fast path: (motion, words, n)
@@ -1650,7 +1654,7 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin, CompMixin):
         elif code in (G_52, G_92):
             self.convert_axis_offsets(code, block)
         elif code == G_5_3:
-            raise InterpError("NURBS (G5.2/G5.3) are not supported by this interpreter")
+            self.convert_nurbs(code, block)
 
     def convert_axis_offsets(self, g_code: int, block: Block) -> None:
         if self.cutter_comp_side:
@@ -1868,6 +1872,10 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin, CompMixin):
             self.motion_mode = G_80
         elif is_a_cycle(motion):
             self.convert_cycle(motion, block)
+        elif motion in (G_5, G_5_1):
+            self.convert_spline(motion, block)
+        elif motion == G_5_2:
+            self.convert_nurbs(motion, block)
         else:
             raise InterpError(f"G{motion / 10:g} is not supported by this interpreter")
 
@@ -1928,9 +1936,193 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin, CompMixin):
                 for k in (3, 4, 5, 6, 7, 8):
                     self.current[k] = ends[k]
                 return
-        else:
-            raise InterpError("G76 is not supported by this interpreter")
+        else:  # G76
+            if block.dollar_flag:
+                if block.dollar_number < 0 or block.dollar_number >= self.num_spindles:
+                    raise InterpError("Invalid D-number in G76 cycle")
+                self.active_spindle = int(block.dollar_number)
+            if self.spindle_turning[self.active_spindle] not in (C.CLOCKWISE,
+                                                                 C.COUNTERCLOCKWISE):
+                raise InterpError(
+                    f"Chosen spindle ({self.active_spindle}) not turning in G76")
+            if ends[3:9] != self.current[3:9]:
+                raise InterpError("Cannot move rotary axes with G76")
+            self.convert_threading_cycle(block, ends)
+            return
         self.current = list(ends)
+
+    # ============================================================= threading
+    def convert_threading_cycle(self, block: Block, ends: list[float]) -> None:
+        """G76: passes of decreasing depth, then spring passes (LinuxCNC's algorithm)."""
+        if self.cutter_comp_side:
+            raise InterpError("Cannot use G76 threading cycle with cutter radius compensation on")
+        if block.i_number == 0:
+            raise InterpError("In G76, I must not be 0")
+        if block.j_number <= 0:
+            raise InterpError("In G76, J must be greater than 0")
+        if block.k_number <= block.j_number:
+            raise InterpError("In G76, K must be greater than J")
+        start_x, start_y, start_z = self.current[0], self.current[1], self.current[2]
+        i_number, j_number, k_number = block.i_number, block.j_number, block.k_number
+        if self.lathe_diameter_mode:
+            i_number /= 2
+            j_number /= 2
+            k_number /= 2
+        boring = i_number > 0.0
+        safe_x = start_x
+        full_dia_depth = abs(i_number)
+        start_depth = abs(i_number) + abs(j_number)
+        cut_increment = abs(j_number)
+        full_threadheight = abs(k_number)
+        end_depth = abs(k_number) + abs(i_number)
+        pitch = block.p_number
+        compound = block.q_number
+        if compound == -1:
+            compound = 0.0
+        compound = ldmath.degrees_to_radians(compound)
+        end_x, end_y, end_z = ends[0], ends[1], ends[2]
+        if end_z > start_z:
+            compound = -compound
+        spring_cuts = block.h_number if block.h_flag else 0
+        degression = block.r_number
+        if degression < 1.0 or not block.r_flag:
+            degression = 1.0
+        taper_dist = block.e_number if block.e_flag else 0.0
+        if taper_dist < 0.0:
+            taper_dist = 0.0
+        taper_pitch = (pitch * math.hypot(taper_dist, full_threadheight) / taper_dist
+                       if taper_dist > 0.0 else pitch)
+        if end_z > start_z:
+            taper_dist = -taper_dist
+        taper_flags = max(block.l_number, 0)
+        entry_taper = taper_flags & 1
+        exit_taper = taper_flags & 2
+        target_z = end_z + abs(k_number) * math.tan(compound)
+        passes = 1
+        depth = start_depth
+        zoff = (depth - full_dia_depth) * math.tan(compound)
+        args = (block, boring, safe_x, end_depth, start_y, start_z, taper_dist, entry_taper,
+                exit_taper, taper_pitch, pitch, full_threadheight, target_z)
+        while depth < end_depth:
+            self._threading_pass(depth, zoff, *args)
+            passes += 1
+            depth = full_dia_depth + cut_increment * math.pow(passes, 1.0 / degression)
+            zoff = (depth - full_dia_depth) * math.tan(compound)
+        depth = end_depth
+        zoff = (depth - full_dia_depth) * math.tan(compound)
+        for _ in range(spring_cuts + 1):
+            self._threading_pass(depth, zoff, *args)
+        cur = self.current
+        self.canon.STRAIGHT_TRAVERSE(block.line_number, end_x, end_y, end_z, *cur[3:9])
+        cur[0], cur[1], cur[2] = end_x, end_y, end_z
+
+    def _threading_pass(self, depth, zoff, block, boring, safe_x, end_depth, start_y, start_z,
+                        taper_dist, entry_taper, exit_taper, taper_pitch, pitch,
+                        full_threadheight, target_z) -> None:
+        canon = self.canon
+        line = block.line_number
+        rest = self.current[3:9]
+        spindle = self.active_spindle
+
+        def x_at(d: float) -> float:
+            return safe_x + d if boring else safe_x - d
+
+        canon.STRAIGHT_TRAVERSE(line, x_at(depth - end_depth), start_y, start_z - zoff, *rest)
+        if taper_dist and entry_taper:
+            canon.DISABLE_FEED_OVERRIDE()
+            canon.START_SPEED_FEED_SYNCH(spindle, taper_pitch, False)
+            canon.STRAIGHT_FEED(line, x_at(depth - full_threadheight), start_y, start_z - zoff,
+                                *rest)
+            canon.STRAIGHT_FEED(line, x_at(depth), start_y, start_z - zoff - taper_dist, *rest)
+            canon.START_SPEED_FEED_SYNCH(spindle, pitch, False)
+        else:
+            canon.STRAIGHT_TRAVERSE(line, x_at(depth), start_y, start_z - zoff, *rest)
+            canon.DISABLE_FEED_OVERRIDE()
+            canon.START_SPEED_FEED_SYNCH(spindle, pitch, False)
+        if taper_dist and exit_taper:
+            canon.STRAIGHT_FEED(line, x_at(depth), start_y, target_z - zoff + taper_dist, *rest)
+            canon.START_SPEED_FEED_SYNCH(spindle, taper_pitch, False)
+            canon.STRAIGHT_FEED(line, x_at(depth - full_threadheight), start_y, target_z - zoff,
+                                *rest)
+        else:
+            canon.STRAIGHT_FEED(line, x_at(depth), start_y, target_z - zoff, *rest)
+        canon.STOP_SPEED_FEED_SYNCH()
+        canon.STRAIGHT_TRAVERSE(line, x_at(depth - end_depth), start_y, target_z - zoff, *rest)
+        canon.ENABLE_FEED_OVERRIDE()
+
+    # =============================================================== splines
+    def convert_spline(self, mode: int, block: Block) -> None:
+        if self.cutter_comp_side:
+            raise InterpError("Cannot convert spline with cutter radius compensation")
+        if self.feed_mode == UNITS_PER_MINUTE:
+            if self.feed_rate == 0.0:
+                raise InterpError("Cannot make arc with zero feed rate")
+        elif self.feed_mode == INVERSE_TIME and not block.f_flag:
+            raise InterpError("F word missing with inverse time arc move")
+        if self.plane != C.PLANE_XY:
+            raise InterpError("Splines must be in the XY plane")
+        if block.z_flag or block.a_flag or block.b_flag or block.c_flag:
+            raise InterpError("Splines may not have motion in Z, A, B, or C")
+        cur = self.current
+        if mode == G_5_1:
+            if not block.i_flag or not block.j_flag:
+                raise InterpError("Must specify both I and J with G5.1")
+            x1, y1 = cur[0] + block.i_number, cur[1] + block.j_number
+            ends = self.find_ends(block)
+            points = [(cur[0], cur[1], 1.0), (x1, y1, 1.0), (ends[0], ends[1], 1.0)]
+            self.canon.NURBS_FEED(block.line_number, points, 3)
+        else:
+            if not block.i_flag or not block.j_flag:
+                if block.i_flag or block.j_flag:
+                    raise InterpError("Must specify both I and J, or neither")
+                x1, y1 = cur[0] + self.cycle_i, cur[1] + self.cycle_j
+            else:
+                x1, y1 = cur[0] + block.i_number, cur[1] + block.j_number
+            ends = self.find_ends(block)
+            if not block.p_flag or not block.q_flag:
+                raise InterpError("Must specify both P and Q with G5")
+            x2, y2 = ends[0] + block.p_number, ends[1] + block.q_number
+            points = [(cur[0], cur[1], 1.0), (x1, y1, 1.0), (x2, y2, 1.0),
+                      (ends[0], ends[1], 1.0)]
+            self.canon.NURBS_FEED(block.line_number, points, 4)
+            self.cycle_i = -block.p_number
+            self.cycle_j = -block.q_number
+        self.nurbs_points = []
+        cur[0], cur[1] = ends[0], ends[1]
+
+    def convert_nurbs(self, mode: int, block: Block) -> None:
+        points = self.nurbs_points
+        if mode == G_5_2:
+            if block.x_flag != block.y_flag:
+                raise InterpError("You must specify both X and Y coordinates for Control Points")
+            if not block.x_flag and block.p_number > 0 and points:
+                raise InterpError("Can specify P without X and Y only for the first control point")
+            if block.p_number <= 0 and points:
+                raise InterpError("Must specify positive weight P for every Control Point")
+            if self.feed_mode == UNITS_PER_MINUTE and self.feed_rate == 0.0:
+                raise InterpError("Cannot make a NURBS with 0 feedrate")
+            if self.motion_mode != mode:
+                points.clear()
+            if not points:
+                weight = block.p_number if (not block.x_flag and block.p_number > 0) else 1.0
+                self.nurbs_order = 3
+                points.append((self.current[0], self.current[1], weight))
+            if block.l_number != -1 and block.l_number > 3:
+                self.nurbs_order = block.l_number
+            if block.x_flag and block.y_flag:
+                ends = self.find_ends(block)
+                points.append((ends[0], ends[1], block.p_number))
+            self.motion_mode = mode
+        else:
+            if self.motion_mode != G_5_2:
+                raise InterpError("Cannot use G5.3 without G5.2 first")
+            if len(points) < self.nurbs_order:
+                raise InterpError("You must specify a number of control points at least equal "
+                                  f"to the order L = {self.nurbs_order}")
+            self.current[0], self.current[1] = points[-1][0], points[-1][1]
+            self.canon.NURBS_FEED(block.line_number, list(points), self.nurbs_order)
+            points.clear()
+            self.motion_mode = -1
 
     def inverse_time_rate_straight(self, ends: list[float], block: Block) -> None:
         cur = self.current

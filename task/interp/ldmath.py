@@ -93,3 +93,8 @@ def find_turn(x1: float, y1: float, center_x: float, center_y: float, turn: int,
     if alpha <= beta:
         alpha = float(ld(alpha) + two_pi)
     return float((ld(beta) - ld(alpha)) + (turn + 1) * two_pi)
+
+
+def degrees_to_radians(degrees: float) -> float:
+    """``(double)(degrees * (M_PIl / 180.0))``"""
+    return float(ld(degrees) * (pi_ld() / ld(180.0)))
