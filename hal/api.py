@@ -1,0 +1,559 @@
+"""Writing HAL components: a declarative API for realtime ones, LinuxCNC's API for userspace.
+
+Realtime component (loaded into the host with ``loadrt NAME``; see hal/README.md)::
+
+    from hal.api import RtComponent, funct, param, pin
+
+    class And2(RtComponent):
+        in0 = pin("bit in")
+        in1 = pin("bit in")
+        out = pin("bit out")
+
+        @funct()                       # function named like the instance: and2.0
+        def update(self, period: int) -> None:
+            self.out = self.in0 and self.in1
+
+Userspace component (its own process), as with LinuxCNC's Python ``hal`` module::
+
+    c = component("mycomp")
+    c.newpin("out", HAL_FLOAT, HAL_OUT)
+    c.ready()
+    c["out"] = 1.5
+"""
+
+from __future__ import annotations
+
+import atexit
+import contextlib
+import os
+from collections.abc import Callable
+from typing import Any, ClassVar
+
+from hal import core
+from hal.core import (
+    DIRS_BY_NAME,
+    HAL_BIT,
+    HAL_FLOAT,
+    HAL_IN,
+    HAL_IO,
+    HAL_OUT,
+    HAL_RO,
+    HAL_RW,
+    HAL_S32,
+    HAL_S64,
+    HAL_U32,
+    HAL_U64,
+    TYPES_BY_NAME,
+    Hal,
+    HalError,
+)
+
+__all__ = [
+    "HAL_BIT",
+    "HAL_FLOAT",
+    "HAL_IN",
+    "HAL_IO",
+    "HAL_OUT",
+    "HAL_RO",
+    "HAL_RW",
+    "HAL_S32",
+    "HAL_S64",
+    "HAL_U32",
+    "HAL_U64",
+    "HalError",
+    "RtComponent",
+    "component",
+    "funct",
+    "module_funct",
+    "param",
+    "pin",
+    "shared_hal",
+]
+
+_shared: Hal | None = None
+
+
+def shared_hal() -> Hal:
+    """This process's attachment to the HAL of the current instance (created on first use)."""
+    global _shared
+    if _shared is None:
+        _shared = Hal()
+    return _shared
+
+
+def set_shared_hal(hal: Hal | None) -> None:
+    """Let a process that made its own ``Hal`` (the host, a test) share it with components."""
+    global _shared
+    _shared = hal
+
+
+# ---------------------------------------------------------------- value accessors
+# One small class per type and kind, so a component's ``self.x`` costs a descriptor call and
+# two memoryview lookups: the pin's pointer entry, then the value slot it points at.
+_S32_OFFSET = 1 << 31
+
+
+class _Accessor:
+    __slots__ = ("f", "ptr", "q", "slot", "u")
+
+    def __init__(self, hal: Hal, slot: int) -> None:
+        self.f, self.q, self.u, self.ptr, self.slot = hal.f, hal.q, hal.u, hal.ptr, slot
+
+
+class _FloatPin(_Accessor):
+    __slots__ = ()
+
+    def __get__(self, inst: object, owner: type | None = None) -> float:
+        return self.f[self.ptr[self.slot]]
+
+    def __set__(self, inst: object, value: float) -> None:
+        self.f[self.ptr[self.slot]] = float(value)
+
+
+class _BitPin(_Accessor):
+    __slots__ = ()
+
+    def __get__(self, inst: object, owner: type | None = None) -> bool:
+        return self.q[self.ptr[self.slot]] != 0
+
+    def __set__(self, inst: object, value: object) -> None:
+        self.q[self.ptr[self.slot]] = 1 if value else 0
+
+
+class _S32Pin(_Accessor):
+    __slots__ = ()
+
+    def __get__(self, inst: object, owner: type | None = None) -> int:
+        return self.q[self.ptr[self.slot]]
+
+    def __set__(self, inst: object, value: int) -> None:
+        self.q[self.ptr[self.slot]] = ((int(value) + _S32_OFFSET) & 0xFFFFFFFF) - _S32_OFFSET
+
+
+class _U32Pin(_Accessor):
+    __slots__ = ()
+
+    def __get__(self, inst: object, owner: type | None = None) -> int:
+        return self.u[self.ptr[self.slot]]
+
+    def __set__(self, inst: object, value: int) -> None:
+        self.u[self.ptr[self.slot]] = int(value) & 0xFFFFFFFF
+
+
+class _S64Pin(_Accessor):
+    __slots__ = ()
+
+    def __get__(self, inst: object, owner: type | None = None) -> int:
+        return self.q[self.ptr[self.slot]]
+
+    def __set__(self, inst: object, value: int) -> None:
+        self.q[self.ptr[self.slot]] = core.wrap_value(HAL_S64, value)
+
+
+class _U64Pin(_Accessor):
+    __slots__ = ()
+
+    def __get__(self, inst: object, owner: type | None = None) -> int:
+        return self.u[self.ptr[self.slot]]
+
+    def __set__(self, inst: object, value: int) -> None:
+        self.u[self.ptr[self.slot]] = int(value) & 0xFFFFFFFFFFFFFFFF
+
+
+class _FloatParam(_Accessor):
+    __slots__ = ()
+
+    def __get__(self, inst: object, owner: type | None = None) -> float:
+        return self.f[self.slot]
+
+    def __set__(self, inst: object, value: float) -> None:
+        self.f[self.slot] = float(value)
+
+
+class _BitParam(_Accessor):
+    __slots__ = ()
+
+    def __get__(self, inst: object, owner: type | None = None) -> bool:
+        return self.q[self.slot] != 0
+
+    def __set__(self, inst: object, value: object) -> None:
+        self.q[self.slot] = 1 if value else 0
+
+
+class _IntParam(_Accessor):
+    __slots__ = ("hal_type",)
+
+    def __get__(self, inst: object, owner: type | None = None) -> int:
+        return (self.u if self.hal_type in (HAL_U32, HAL_U64) else self.q)[self.slot]
+
+    def __set__(self, inst: object, value: int) -> None:
+        stored = core.wrap_value(self.hal_type, value)
+        (self.u if self.hal_type in (HAL_U32, HAL_U64) else self.q)[self.slot] = stored
+
+
+_PIN_ACCESSORS = {
+    HAL_FLOAT: _FloatPin,
+    HAL_BIT: _BitPin,
+    HAL_S32: _S32Pin,
+    HAL_U32: _U32Pin,
+    HAL_S64: _S64Pin,
+    HAL_U64: _U64Pin,
+}
+
+
+def make_accessor(hal: Hal, hal_type: int, slot: int, *, is_pin: bool) -> Any:
+    """A descriptor object reading and writing one pin or parameter."""
+    if is_pin:
+        return _PIN_ACCESSORS[hal_type](hal, slot)
+    if hal_type == HAL_FLOAT:
+        return _FloatParam(hal, slot)
+    if hal_type == HAL_BIT:
+        return _BitParam(hal, slot)
+    accessor = _IntParam(hal, slot)
+    accessor.hal_type = hal_type
+    return accessor
+
+
+class PinArray:
+    """``self.in_[i]`` for a pin or parameter declared with ``count=N``."""
+
+    __slots__ = ("_items",)
+
+    def __init__(self, items: list[Any]) -> None:
+        self._items = items
+
+    def __len__(self) -> int:
+        return len(self._items)
+
+    def __getitem__(self, index: int) -> Any:
+        return self._items[index].__get__(None)
+
+    def __setitem__(self, index: int, value: Any) -> None:
+        self._items[index].__set__(None, value)
+
+
+class _ArrayDescriptor:
+    __slots__ = ("array",)
+
+    def __init__(self, array: PinArray) -> None:
+        self.array = array
+
+    def __get__(self, inst: object, owner: type | None = None) -> PinArray:
+        return self.array
+
+
+# ---------------------------------------------------------------- declarations
+class _Decl:
+    """A pin or parameter declared in an ``RtComponent`` class body."""
+
+    is_pin: ClassVar[bool] = True
+
+    def __init__(
+        self,
+        spec: str,
+        name: str | None = None,
+        *,
+        count: int | str | None = None,
+        default: Any = 0,
+        doc: str = "",
+    ) -> None:
+        words = spec.split()
+        if len(words) != 2 or words[0] not in TYPES_BY_NAME or words[1] not in DIRS_BY_NAME:
+            raise ValueError(f"bad declaration '{spec}': want e.g. 'float in' or 'bit rw'")
+        self.hal_type = TYPES_BY_NAME[words[0]]
+        self.direction = DIRS_BY_NAME[words[1]]
+        self.name = name
+        self.count = count
+        self.default = default
+        self.doc = doc
+        self.attr = ""
+
+    def __set_name__(self, owner: type, attr: str) -> None:
+        self.attr = attr
+        if self.name is None:
+            self.name = attr.rstrip("_").replace("_", "-")
+
+    def hal_names(self, count: int | None) -> list[str]:
+        assert self.name is not None
+        if count is None:
+            return [self.name]
+        pattern = self.name if "{" in self.name else self.name + "{}"
+        return [pattern.format(i) for i in range(count)]
+
+
+def pin(spec: str, name: str | None = None, **kwargs: Any) -> Any:
+    """Declare a pin: ``pin("float in")``, ``pin("bit out", "is-on")``, ``count=4``."""
+    decl = _Decl(spec, name, **kwargs)
+    if decl.direction not in (HAL_IN, HAL_OUT, HAL_IO):
+        raise ValueError(f"pin direction must be in, out or io, not '{spec}'")
+    return decl
+
+
+class _ParamDecl(_Decl):
+    is_pin = False
+
+
+def param(spec: str, name: str | None = None, **kwargs: Any) -> Any:
+    """Declare a parameter: ``param("float rw")``, ``param("s32 ro", "count")``."""
+    decl = _ParamDecl(spec, name, **kwargs)
+    if decl.direction not in (HAL_RO, HAL_RW):
+        raise ValueError(f"parameter direction must be ro or rw, not '{spec}'")
+    return decl
+
+
+def _target(method: Any) -> Any:
+    """The plain function behind a (class)method, where marks must live to be found."""
+    return method.__func__ if isinstance(method, classmethod | staticmethod) else method
+
+
+def funct(name: str = "", *, fp: bool = True) -> Callable[[Callable], Callable]:
+    """Mark a method ``f(self, period_ns)`` as a HAL function of each instance.
+
+    ``name`` "" gives the function the instance's name (``and2.0``); otherwise it is
+    ``<instance>.<name>`` (``pid.0.do-pid-calcs``).
+    """
+
+    def mark(method: Callable) -> Callable:
+        _target(method)._hal_funct = (name, fp)
+        return method
+
+    return mark
+
+
+def module_funct(name: str, *, fp: bool = True) -> Callable[[Callable], Callable]:
+    """Mark a classmethod ``f(cls, instances, period_ns)`` as one function for all instances,
+    named ``<module>.<name>`` (``stepgen.make-pulses``)."""
+
+    def mark(method: Callable) -> Callable:
+        _target(method)._hal_module_funct = (name, fp)
+        return method
+
+    return mark
+
+
+class RtComponent:
+    """Base class of realtime components; see hal/README.md.
+
+    Class attributes: ``pin(...)`` and ``param(...)`` declarations, methods marked with
+    ``@funct``/``@module_funct``. Override ``setup(self, **options)`` for per-instance state
+    and ``instances(cls, module, args)`` for loadrt arguments other than count/names.
+    """
+
+    name: str = ""
+    #: instance name prefix when loaded with count=; default: module name with '-' for '_'
+    prefix: str = ""
+    #: loadrt options besides count/names, with their converters, e.g. {"depth": int}
+    options: ClassVar[dict[str, Callable[[str], Any]]] = {}
+
+    def setup(self, **options: Any) -> None:
+        """Called once after the instance's pins exist (``self.hal``, ``self.comp`` are set)."""
+
+    def teardown(self) -> None:
+        """Called when the module is unloaded: release what ``setup`` acquired."""
+
+    @classmethod
+    def instances(cls, module: str, args: dict[str, str]) -> list[tuple[str, dict[str, Any]]]:
+        """(instance name, setup options) for each instance ``loadrt`` asks for."""
+        unknown = set(args) - {"count", "names"} - set(cls.options)
+        if unknown:
+            raise HalError(f"{module}: unknown argument '{sorted(unknown)[0]}'")
+        if "count" in args and "names" in args:
+            raise HalError(f"{module}: count= and names= are mutually exclusive")
+        options = {
+            key: cls.options[key](value) for key, value in args.items() if key in cls.options
+        }
+        if "names" in args:
+            names = [n for n in args["names"].split(",") if n]
+        else:
+            try:
+                count = int(args.get("count", "1"))
+            except ValueError:
+                raise HalError(f"{module}: count must be a number") from None
+            prefix = cls.prefix or module.replace("_", "-")
+            names = [f"{prefix}.{i}" for i in range(count)]
+        return [(name, dict(options)) for name in names]
+
+    def is_connected(self, attr: str) -> bool:
+        """True when the pin declared as ``attr`` is linked to a signal."""
+        accessor = type(self).__dict__[attr]
+        return accessor.ptr[accessor.slot] != accessor.slot
+
+    @classmethod
+    def declarations(cls) -> list[_Decl]:
+        found: dict[str, _Decl] = {}
+        for klass in reversed(cls.__mro__):
+            for attr, value in vars(klass).items():
+                if isinstance(value, _Decl):
+                    found[attr] = value
+        return list(found.values())
+
+    @classmethod
+    def create(
+        cls, hal: Hal, comp: str, name: str, options: dict[str, Any] | None = None
+    ) -> RtComponent:
+        """Make one instance: its pins and parameters in HAL, then ``setup``."""
+        attrs: dict[str, Any] = {}
+        for decl in cls.declarations():
+            count = decl.count
+            if isinstance(count, str):
+                count = int((options or {})[count])
+            accessors = []
+            for hal_name in decl.hal_names(count):
+                full = f"{name}.{hal_name}"
+                if decl.is_pin:
+                    slot = hal.new_pin(comp, full, decl.hal_type, decl.direction)
+                else:
+                    slot = hal.new_param(comp, full, decl.hal_type, decl.direction)
+                accessor = make_accessor(hal, decl.hal_type, slot, is_pin=decl.is_pin)
+                accessor.__set__(None, decl.default)
+                accessors.append(accessor)
+            if count is None:
+                attrs[decl.attr] = accessors[0]
+            else:
+                attrs[decl.attr] = _ArrayDescriptor(PinArray(accessors))
+        bound_class = type(cls.__name__, (cls,), attrs)
+        inst = object.__new__(bound_class)
+        inst.name = name
+        inst.hal = hal
+        inst.comp = comp
+        inst.setup(**(options or {}))
+        return inst
+
+    @classmethod
+    def functs(cls) -> list[tuple[str, bool, str, bool]]:
+        """(name, uses_fp, method name, is_module_funct) for every marked method."""
+        found = []
+        for attr in dir(cls):
+            method = getattr(cls, attr, None)
+            if hasattr(method, "_hal_funct"):
+                found.append((*method._hal_funct, attr, False))
+            elif hasattr(method, "_hal_module_funct"):
+                found.append((*method._hal_module_funct, attr, True))
+        return found
+
+
+# ---------------------------------------------------------------- userspace (LinuxCNC-like)
+class Item:
+    """A pin or parameter of a userspace component (``c.newpin(...)`` returns one)."""
+
+    def __init__(self, hal: Hal, name: str, hal_type: int, direction: int, slot: int) -> None:
+        self.hal, self.name, self.type, self.dir, self.slot = hal, name, hal_type, direction, slot
+        self.is_pin = direction in (HAL_IN, HAL_OUT, HAL_IO)
+
+    def get(self) -> Any:
+        slot = self.hal.ptr[self.slot] if self.is_pin else self.slot
+        value = self.hal.read_slot(self.type, slot)
+        return bool(value) if self.type == HAL_BIT else value
+
+    def set(self, value: Any) -> None:
+        slot = self.hal.ptr[self.slot] if self.is_pin else self.slot
+        self.hal.write_slot(self.type, slot, value)
+
+    def get_name(self) -> str:
+        return self.name
+
+    def get_type(self) -> int:
+        return self.type
+
+    def get_dir(self) -> int:
+        return self.dir
+
+    def is_pin_(self) -> bool:
+        return self.is_pin
+
+
+class component:
+    """A userspace HAL component: ``component(name)``, ``newpin``, ``ready``, ``c[pin]``."""
+
+    def __init__(self, name: str, prefix: str | None = None, hal: Hal | None = None) -> None:
+        self._hal = hal or shared_hal()
+        self._name = name
+        self._prefix = prefix if prefix is not None else name
+        self._items: dict[str, Item] = {}
+        self._hal.new_component(name, "user", os.getpid())
+        self._is_alive = True
+        atexit.register(self.exit)
+
+    def newpin(self, name: str, hal_type: int, direction: int) -> Item:
+        full = f"{self._prefix}.{name}"
+        slot = self._hal.new_pin(self._name, full, hal_type, direction)
+        item = Item(self._hal, full, hal_type, direction, slot)
+        self._items[name] = item
+        return item
+
+    def newparam(self, name: str, hal_type: int, direction: int) -> Item:
+        full = f"{self._prefix}.{name}"
+        slot = self._hal.new_param(self._name, full, hal_type, direction)
+        item = Item(self._hal, full, hal_type, direction, slot)
+        self._items[name] = item
+        return item
+
+    def getpin(self, name: str) -> Item:
+        return self._items[name]
+
+    def getpins(self) -> dict[str, Item]:
+        return dict(self._items)
+
+    def ready(self) -> None:
+        self._hal.ready(self._name)
+
+    def exit(self) -> None:
+        if self._is_alive:
+            self._is_alive = False
+            with contextlib.suppress(HalError):
+                self._hal.remove_component(self._name)
+
+    def getprefix(self) -> str:
+        return self._prefix
+
+    def setprefix(self, prefix: str) -> None:
+        self._prefix = prefix
+
+    def __getitem__(self, name: str) -> Any:
+        return self._items[name].get()
+
+    def __setitem__(self, name: str, value: Any) -> None:
+        self._items[name].set(value)
+
+    def __enter__(self) -> component:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.exit()
+
+
+# ---------------------------------------------------------------- module-level helpers
+def component_exists(name: str) -> bool:
+    return name in shared_hal().meta["comps"]
+
+
+def component_is_ready(name: str) -> bool:
+    comp = shared_hal().meta["comps"].get(name)
+    return bool(comp and comp["is_ready"])
+
+
+def get_value(name: str) -> Any:
+    """The value of a pin, parameter or signal by name, like ``hal.get_value``."""
+    hal = shared_hal()
+    found = hal.find_pin(name)
+    if found:
+        value = hal.pin_value(found[1])
+        return bool(value) if found[1]["type"] == HAL_BIT else value
+    found = hal.find_param(name)
+    if found:
+        value = hal.read_slot(found[1]["type"], found[1]["slot"])
+        return bool(value) if found[1]["type"] == HAL_BIT else value
+    sig = hal.meta["sigs"].get(name)
+    if sig:
+        value = hal.read_slot(sig["type"], sig["slot"])
+        return bool(value) if sig["type"] == HAL_BIT else value
+    raise HalError(f"pin, parameter or signal '{name}' not found")
+
+
+def pin_has_writer(name: str) -> bool:
+    hal = shared_hal()
+    found = hal.find_pin(name)
+    if not found:
+        raise HalError(f"pin '{name}' not found")
+    sig = found[1]["sig"]
+    return bool(sig and hal.meta["sigs"][sig]["writers"] + hal.meta["sigs"][sig]["bidirs"])

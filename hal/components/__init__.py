@@ -1,0 +1,1 @@
+"""Realtime components, one module each, loaded into the host with ``loadrt NAME``."""

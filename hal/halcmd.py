@@ -1,0 +1,938 @@
+"""halcmd: LinuxCNC's HAL command language, for HAL files and the command line.
+
+``cnc halcmd [-f FILE] [-i INI] [-k] [-s] [-q|-Q|-v] [COMMAND ARGS...]``. Without a command
+or file it reads commands interactively with a ``halcmd:`` prompt. Errors name the file
+and line (``file:line: cause``). Realtime commands (loadrt, unloadrt) go to the realtime
+host, started on the first ``loadrt``; everything else acts on HAL shared memory directly.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import fnmatch
+import json
+import os
+import re
+import shlex
+import signal
+import socket
+import subprocess
+import sys
+import time
+from collections.abc import Callable, Iterable
+from pathlib import Path
+from typing import Any, TextIO
+
+from hal.core import (
+    DIR_NAMES,
+    HAL_IN,
+    HAL_IO,
+    HAL_OUT,
+    HAL_RO,
+    NSLOTS,
+    TYPE_NAMES,
+    TYPES_BY_NAME,
+    Hal,
+    HalError,
+    format_value,
+    is_compliant_name,
+    parse_value,
+)
+from hal.rtapi_app import is_alive, release_if_unused, socket_address
+
+HOST_START_TIMEOUT_S = 15.0
+USR_READY_TIMEOUT_S = 10.0
+# LinuxCNC's lock bits: tune = load + config, so setp and start/stop stay allowed
+LOCK_LEVELS = {"none": 0, "load": 1, "config": 2, "params": 4, "run": 8, "tune": 3, "all": 255}
+# halcmd's variable names: letters, digits, '.', '-', '_'; parentheses allow any name
+_INI_REF = re.compile(r"\[([^\]]*)\](?:\(([^)]*)\)|([A-Za-z0-9._-]+))")
+_ENV_REF = re.compile(r"\$(?:\(([^)]*)\)|([A-Za-z0-9._-]+))")
+_ARROWS = ("=>", "<=", "<=>")
+
+
+# ---------------------------------------------------------------- the realtime host
+class HostClient:
+    """Talks to the realtime host over its socket; starts it when asked to."""
+
+    def __init__(self) -> None:
+        self.address = socket_address()
+        self.started: subprocess.Popen[bytes] | None = None
+
+    def is_running(self) -> bool:
+        try:
+            self.request({"cmd": "ping"})
+        except OSError:
+            return False
+        return True
+
+    def request(self, message: dict[str, Any]) -> dict[str, Any]:
+        with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as sock:
+            sock.settimeout(60)
+            sock.connect(self.address)
+            sock.sendall(json.dumps(message).encode() + b"\n")
+            data = b""
+            while not data.endswith(b"\n"):
+                chunk = sock.recv(65536)
+                if not chunk:
+                    raise OSError("realtime host closed the connection")
+                data += chunk
+        return json.loads(data)
+
+    def ensure(self, stderr: int | TextIO | None = None) -> None:
+        """Start ``python -m hal.rtapi_app`` unless one is already running."""
+        if self.is_running():
+            return
+        self.started = subprocess.Popen(
+            [sys.executable, "-m", "hal.rtapi_app"],
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.DEVNULL,
+            stderr=stderr if stderr is not None else subprocess.DEVNULL,
+            start_new_session=True,
+        )
+        deadline = time.monotonic() + HOST_START_TIMEOUT_S
+        while time.monotonic() < deadline:
+            if self.started.poll() is not None:
+                raise HalError("realtime host exited without becoming ready")
+            if self.is_running():
+                return
+            time.sleep(0.02)
+        raise HalError("realtime host did not become ready")
+
+    def call(self, message: dict[str, Any]) -> dict[str, Any]:
+        try:
+            reply = self.request(message)
+        except OSError as exc:
+            raise HalError(f"realtime host not reachable: {exc}") from None
+        if not reply.get("ok"):
+            raise HalError(reply.get("error", "realtime host refused the command"))
+        return reply
+
+    def stop(self) -> None:
+        """Ask the host to exit and wait for it (when this process started it)."""
+        with contextlib.suppress(OSError):
+            self.request({"cmd": "exit"})
+        deadline = time.monotonic() + 10
+        while self.is_running() and time.monotonic() < deadline:
+            time.sleep(0.02)
+        if self.started is not None:
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                self.started.wait(timeout=10)
+
+
+# ---------------------------------------------------------------- helpers
+def strip_comment(line: str) -> str:
+    """The line up to a ``#`` outside double quotes (halcmd's comment rule)."""
+    is_quoted = False
+    for index, char in enumerate(line):
+        if char == '"':
+            is_quoted = not is_quoted
+        elif char == "#" and not is_quoted:
+            return line[:index]
+    if is_quoted:
+        raise HalError("unterminated quoted string")
+    return line
+
+
+def tokenize(line: str) -> list[str]:
+    """Split a (comment-free, substituted) HAL line into words; double quotes group."""
+    lexer = shlex.shlex(line, posix=True)
+    lexer.whitespace_split = True
+    lexer.commenters = ""
+    try:
+        return list(lexer)
+    except ValueError as exc:
+        raise HalError(f"bad quoting: {exc}") from None
+
+
+def match(pattern: str | None, name: str) -> bool:
+    """LinuxCNC's show/list patterns: glob when it has wildcards, else a name prefix."""
+    if not pattern:
+        return True
+    if any(ch in pattern for ch in "*?["):
+        return fnmatch.fnmatchcase(name, pattern)
+    return name.startswith(pattern)
+
+
+def logical_lines(lines: Iterable[str]) -> Iterable[tuple[int, str]]:
+    """(first line number, text) with backslash continuations joined."""
+    pending, start = "", 0
+    for number, raw in enumerate(lines, 1):
+        text = raw.rstrip("\n").rstrip("\r")
+        if not pending:
+            start = number
+        if text.endswith("\\"):
+            pending += text[:-1]
+            continue
+        yield start, pending + text
+        pending = ""
+    if pending:
+        yield start, pending
+
+
+class HalCmd:
+    """One halcmd session: runs commands against the HAL of the current instance."""
+
+    def __init__(
+        self,
+        hal: Hal | None = None,
+        *,
+        ini: Any = None,
+        is_keep_going: bool = False,
+        is_script: bool = False,
+        verbosity: int = 1,
+        out: TextIO | None = None,
+        err: TextIO | None = None,
+        host: HostClient | None = None,
+    ) -> None:
+        self.hal = hal or Hal()
+        self.ini = ini
+        self.is_keep_going = is_keep_going
+        self.is_script = is_script
+        self.verbosity = verbosity
+        self.out = out or sys.stdout
+        self.err = err or sys.stderr
+        self.host = host or HostClient()
+        self.is_echo = False
+        self.is_quit = False
+        self.where = ""
+        self.user_procs: dict[str, subprocess.Popen[bytes]] = {}
+        self.warned_names: set[str] = set()
+        self.verbs: dict[str, Callable[[list[str]], None]] = {
+            name[3:].replace("_", ""): getattr(self, name)
+            for name in dir(self)
+            if name.startswith("do_")
+        }
+
+    # ------------------------------------------------------------ running
+    def error(self, cause: str) -> None:
+        prefix = f"{self.where}: " if self.where else ""
+        print(f"{prefix}{cause}", file=self.err, flush=True)
+
+    def run_lines(self, lines: Iterable[str], source: str) -> int:
+        """Run commands; returns the number of failed commands (stops at the first unless -k)."""
+        failures = 0
+        for number, text in logical_lines(lines):
+            self.where = f"{source}:{number}"
+            if not self.run_line(text, number):
+                failures += 1
+                if not self.is_keep_going:
+                    break
+            if self.is_quit:
+                break
+        return failures
+
+    def run_file(self, path: str) -> int:
+        try:
+            with open(path, encoding="utf-8", errors="replace") as handle:
+                lines = handle.readlines()
+        except OSError as exc:
+            self.error(f"cannot open '{path}': {exc.strerror}")
+            return 1
+        return self.run_lines(lines, path)
+
+    def run_line(self, text: str, number: int = 0) -> bool:
+        """Run one command line; False (and an error printed) when it failed."""
+        try:
+            words = tokenize(self.substitute(strip_comment(text)))
+        except HalError as exc:
+            self.error(str(exc))
+            return False
+        if not words:
+            return True
+        if self.is_echo:
+            print(f"({number})<echo>: {' '.join(words)}", file=self.out)
+        return self.run_words(words)
+
+    def run_words(self, words: list[str]) -> bool:
+        if len(words) == 3 and words[1] == "=":
+            words = ["setp", words[0], words[2]]
+        verb = words[0].lower()
+        handler = self.verbs.get(verb)
+        if handler is None:
+            self.error(f"Unknown command '{words[0]}'")
+            return False
+        try:
+            handler(words[1:])
+        except HalError as exc:
+            self.error(str(exc))
+            return False
+        except (KeyError, IndexError, ValueError) as exc:
+            self.error(f"{verb}: {type(exc).__name__}: {exc}")
+            return False
+        return True
+
+    def substitute(self, line: str) -> str:
+        """Replace ``[SECTION]KEY`` / ``[SECTION](KEY)`` by INI values and ``$VAR`` /
+        ``$(VAR)`` by environment values, in the whole line before it is split into words
+        (so ``loadrt [KINS]KINEMATICS`` may bring its own arguments), as halcmd does."""
+
+        def ini_value(found: re.Match[str]) -> str:
+            section, key = found.group(1), found.group(2) or found.group(3)
+            if self.ini is None:
+                raise HalError(f"Ini variable '[{section}]{key}' used but no INI file (-i)")
+            value = self.ini.find(section, key)
+            if value is None:
+                raise HalError(f"Ini variable '[{section}]{key}' not found")
+            return value
+
+        def env_value(found: re.Match[str]) -> str:
+            name = found.group(1) or found.group(2)
+            value = os.environ.get(name)
+            if value is None:
+                raise HalError(f"Environment variable '{name}' not found")
+            return value
+
+        if "[" in line:
+            if "]" not in line[line.index("[") :]:
+                raise HalError("Missing close square bracket")
+            line = _INI_REF.sub(ini_value, line)
+        if "$" in line:
+            line = _ENV_REF.sub(env_value, line)
+        return line
+
+    @staticmethod
+    def _need(args: list[str], low: int, high: int | None, usage: str) -> None:
+        if len(args) < low or (high is not None and len(args) > high):
+            raise HalError(f"usage: {usage}")
+
+    def _check_lock(self, level: int, action: str) -> None:
+        if self.hal.meta["lock"] & level:
+            raise HalError(f"HAL is locked, {action} is not permitted")
+
+    # ------------------------------------------------------------ components
+    def do_loadrt(self, args: list[str]) -> None:
+        self._need(args, 1, None, "loadrt name [key=value...]")
+        self._check_lock(1, "loading")
+        self.host.ensure()
+        self.host.call({"cmd": "loadrt", "name": args[0], "args": args[1:]})
+
+    def do_unloadrt(self, args: list[str]) -> None:
+        self._need(args, 1, 1, "unloadrt name|all")
+        if not self.host.is_running():
+            raise HalError(f"component '{args[0]}' not loaded")
+        if args[0] == "all":
+            self.host.call({"cmd": "unloadall"})
+        else:
+            self.host.call({"cmd": "unloadrt", "name": args[0]})
+
+    def do_loadusr(self, args: list[str]) -> None:
+        self._need(args, 1, None, "loadusr [-W|-w|-i|-n name] program [args...]")
+        is_wait_ready = is_wait_exit = is_ignore_rc = False
+        comp_name = None
+        while args and args[0].startswith("-"):
+            flag = args.pop(0)
+            if flag in ("-W", "-Wn", "-nW"):
+                is_wait_ready = True
+            if flag in ("-n", "-Wn", "-nW"):
+                comp_name = args.pop(0)
+            elif flag == "-w":
+                is_wait_exit = True
+            elif flag == "-i":
+                is_ignore_rc = True
+            elif flag not in ("-W",):
+                raise HalError(f"loadusr: unknown option '{flag}'")
+        if not args:
+            raise HalError("loadusr: no program given")
+        comp_name = comp_name or Path(args[0]).stem
+        try:
+            proc = subprocess.Popen(args, stdin=subprocess.DEVNULL)
+        except OSError as exc:
+            raise HalError(f"loadusr: cannot run '{args[0]}': {exc.strerror}") from None
+        self.user_procs[comp_name] = proc
+        if is_wait_exit:
+            rc = proc.wait()
+            if rc and not is_ignore_rc:
+                raise HalError(f"program '{args[0]}' failed, returned {rc}")
+        elif is_wait_ready:
+            self._wait_ready(comp_name, proc)
+
+    def _wait_ready(self, comp_name: str, proc: subprocess.Popen[bytes]) -> None:
+        deadline = time.monotonic() + USR_READY_TIMEOUT_S
+        while time.monotonic() < deadline:
+            comp = self.hal.meta["comps"].get(comp_name)
+            if comp and comp["is_ready"]:
+                return
+            if proc.poll() is not None:
+                raise HalError(f"{Path(proc.args[0]).name} exited without becoming ready")
+            time.sleep(0.01)
+        raise HalError(f"waiting for component '{comp_name}' timed out")
+
+    def do_waitusr(self, args: list[str]) -> None:
+        self._need(args, 1, 1, "waitusr name")
+        comp = self.hal.meta["comps"].get(args[0])
+        if comp is None or comp["kind"] != "user":
+            raise HalError(f"component '{args[0]}' not found or not a user space component")
+        proc = self.user_procs.get(args[0])
+        if proc is not None:
+            proc.wait()
+            return
+        while args[0] in self.hal.meta["comps"]:
+            time.sleep(0.05)
+
+    def do_unloadusr(self, args: list[str]) -> None:
+        self._need(args, 1, 1, "unloadusr name|all")
+        meta = self.hal.meta
+        names = [
+            n
+            for n, c in meta["comps"].items()
+            if c["kind"] == "user"
+            and (args[0] == "all" or n == args[0])
+            and c["pid"] != os.getpid()
+        ]
+        if not names and args[0] != "all":
+            raise HalError(f"user space component '{args[0]}' not found")
+        for name in names:
+            self._stop_user(name, meta["comps"][name]["pid"])
+
+    def _stop_user(self, name: str, pid: int) -> None:
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(pid, signal.SIGTERM)
+        deadline = time.monotonic() + 5
+        while name in self.hal.meta["comps"] and time.monotonic() < deadline:
+            proc = self.user_procs.get(name)
+            if proc is not None:
+                proc.poll()
+            if not is_alive(pid):
+                break  # died without removing its component: remove it below
+            time.sleep(0.02)
+        if name in self.hal.meta["comps"]:
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(pid, signal.SIGKILL)
+            with contextlib.suppress(HalError):
+                self.hal.remove_component(name)
+        proc = self.user_procs.pop(name, None)
+        if proc is not None:
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                proc.wait(timeout=5)
+
+    def do_unload(self, args: list[str]) -> None:
+        self._need(args, 1, 1, "unload name|all")
+        self._check_lock(1, "unloading")
+        comps = self.hal.meta["comps"]
+        if args[0] == "all":
+            self.do_unloadusr(["all"])
+            if self.host.is_running():
+                self.host.call({"cmd": "unloadall"})
+            return
+        comp = comps.get(args[0])
+        if comp is None:
+            raise HalError(f"component '{args[0]}' not found")
+        if comp["kind"] == "user":
+            self.do_unloadusr(args)
+        else:
+            self.do_unloadrt(args)
+
+    # ------------------------------------------------------------ signals and links
+    def warn_name(self, kind: str, name: str) -> None:
+        """Warn (once per name) about names that break HAL-005's naming rules."""
+        if not is_compliant_name(name) and name not in self.warned_names:
+            self.warned_names.add(name)
+            print(
+                f"{self.where + ': ' if self.where else ''}Warning: {kind} name '{name}' does "
+                "not follow the HAL naming rules (lowercase letters, digits, '.' and '-')",
+                file=self.err,
+            )
+
+    def do_newsig(self, args: list[str]) -> None:
+        self._need(args, 2, 2, "newsig signame type")
+        self._check_lock(2, "newsig")
+        if args[1] not in TYPES_BY_NAME:
+            raise HalError(f"Unknown signal type '{args[1]}'")
+        self.hal.new_signal(args[0], TYPES_BY_NAME[args[1]])
+        self.warn_name("signal", args[0])
+
+    def do_delsig(self, args: list[str]) -> None:
+        self._need(args, 1, 1, "delsig signame|all")
+        self._check_lock(2, "delsig")
+        names = list(self.hal.meta["sigs"]) if args[0] == "all" else [args[0]]
+        for name in names:
+            self.hal.delete_signal(name)
+
+    def do_net(self, args: list[str]) -> None:
+        self._need(args, 1, None, "net signame [=>|<=|<=>] pin...")
+        self._check_lock(2, "net")
+        sig, pins = args[0], [a for a in args[1:] if a not in _ARROWS]
+        meta = self.hal.meta
+        if self.hal.find_pin(sig) is not None:
+            raise HalError(f"Signal name '{sig}' must not be the same as a pin.")
+        found = []
+        for name in pins:
+            pin = self.hal.find_pin(name)
+            if pin is None:
+                raise HalError(f"Pin '{name}' does not exist")
+            if pin[1]["sig"] is not None and pin[1]["sig"] != sig:
+                raise HalError(f"Pin '{name}' was already linked to signal '{pin[1]['sig']}'")
+            found.append(pin)
+        with self.hal.edit():
+            if sig not in meta["sigs"]:
+                if not found:
+                    raise HalError(f"signal '{sig}' does not exist and no pins given")
+                self.hal.new_signal(sig, found[0][1]["type"])
+                self.warn_name("signal", sig)
+            # writers first, so a second writer is refused before anything is linked
+            ordered = sorted(found, key=lambda p: p[1]["dir"] == HAL_IN)
+            for name, _ in ordered:
+                self.hal.link(name, sig)
+
+    def do_linkps(self, args: list[str]) -> None:
+        args = [a for a in args if a not in _ARROWS]
+        self._need(args, 2, 2, "linkps pinname signame")
+        self._check_lock(2, "linkps")
+        self.hal.link(args[0], args[1])
+
+    def do_linksp(self, args: list[str]) -> None:
+        args = [a for a in args if a not in _ARROWS]
+        self._need(args, 2, 2, "linksp signame pinname")
+        self._check_lock(2, "linksp")
+        self.hal.link(args[1], args[0])
+
+    def do_linkpp(self, args: list[str]) -> None:
+        args = [a for a in args if a not in _ARROWS]
+        self._need(args, 2, 2, "linkpp pin1 pin2")
+        self.do_net([args[0], args[0], args[1]])
+
+    def do_unlinkp(self, args: list[str]) -> None:
+        self._need(args, 1, 1, "unlinkp pinname")
+        self._check_lock(2, "unlinkp")
+        self.hal.unlink(args[0])
+
+    # ------------------------------------------------------------ values
+    def do_setp(self, args: list[str]) -> None:
+        self._need(args, 2, 2, "setp name value")
+        self._check_lock(4, "setp")
+        param = self.hal.find_param(args[0])
+        if param is not None:
+            _name, info = param
+            if info["dir"] == HAL_RO:
+                raise HalError(f"param '{args[0]}' is not writable")
+            self.hal.write_slot(info["type"], info["slot"], self._parse(info["type"], args[1]))
+            return
+        pin = self.hal.find_pin(args[0])
+        if pin is None:
+            raise HalError(f"parameter or pin '{args[0]}' not found")
+        _name, info = pin
+        if info["dir"] == HAL_OUT:
+            raise HalError(f"pin '{args[0]}' is not writable")
+        if info["sig"] is not None:
+            raise HalError(f"pin '{args[0]}' is connected to a signal")
+        self.hal.write_slot(info["type"], info["slot"], self._parse(info["type"], args[1]))
+
+    @staticmethod
+    def _parse(hal_type: int, text: str) -> int | float:
+        return parse_value(hal_type, text)
+
+    def do_sets(self, args: list[str]) -> None:
+        self._need(args, 2, 2, "sets signame value")
+        self._check_lock(4, "sets")
+        sig = self.hal.meta["sigs"].get(args[0])
+        if sig is None:
+            raise HalError(f"signal '{args[0]}' not found")
+        if sig["writers"]:  # I/O pins share a signal with whoever sets it, as in LinuxCNC
+            raise HalError(f"signal '{args[0]}' already has writer(s)")
+        self.hal.write_slot(sig["type"], sig["slot"], parse_value(sig["type"], args[1]))
+
+    def _lookup(self, name: str) -> tuple[str, int, int | float]:
+        """(kind, type, value) of a pin or parameter."""
+        param = self.hal.find_param(name)
+        if param is not None:
+            info = param[1]
+            return "param", info["type"], self.hal.read_slot(info["type"], info["slot"])
+        pin = self.hal.find_pin(name)
+        if pin is not None:
+            return "pin", pin[1]["type"], self.hal.pin_value(pin[1])
+        raise HalError(f"pin or parameter '{name}' not found")
+
+    def do_getp(self, args: list[str]) -> None:
+        self._need(args, 1, 1, "getp name")
+        _, hal_type, value = self._lookup(args[0])
+        print(format_value(hal_type, value, is_show=False), file=self.out)
+
+    def do_ptype(self, args: list[str]) -> None:
+        self._need(args, 1, 1, "ptype name")
+        print(TYPE_NAMES[self._lookup(args[0])[1]], file=self.out)
+
+    def do_gets(self, args: list[str]) -> None:
+        self._need(args, 1, 1, "gets signame")
+        sig = self.hal.meta["sigs"].get(args[0])
+        if sig is None:
+            raise HalError(f"signal '{args[0]}' not found")
+        value = self.hal.read_slot(sig["type"], sig["slot"])
+        print(format_value(sig["type"], value, is_show=False), file=self.out)
+
+    def do_stype(self, args: list[str]) -> None:
+        self._need(args, 1, 1, "stype signame")
+        sig = self.hal.meta["sigs"].get(args[0])
+        if sig is None:
+            raise HalError(f"signal '{args[0]}' not found")
+        print(TYPE_NAMES[sig["type"]], file=self.out)
+
+    # ------------------------------------------------------------ functions and threads
+    def do_addf(self, args: list[str]) -> None:
+        self._need(args, 2, 3, "addf funcname threadname [position]")
+        self._check_lock(2, "addf")
+        position = int(args[2]) if len(args) == 3 else -1
+        self.hal.add_funct(args[0], args[1], position)
+
+    def do_delf(self, args: list[str]) -> None:
+        self._need(args, 1, 2, "delf funcname [threadname]")
+        self._check_lock(2, "delf")
+        if len(args) == 2:
+            self.hal.del_funct(args[0], args[1])
+            return
+        threads = [t for t, i in self.hal.meta["threads"].items() if args[0] in i["functs"]]
+        if not threads:
+            raise HalError(f"function '{args[0]}' not linked to any thread")
+        for thread in threads:
+            self.hal.del_funct(args[0], thread)
+
+    def do_start(self, args: list[str]) -> None:
+        self._check_lock(8, "start")
+        self.hal.set_running(True)
+
+    def do_stop(self, args: list[str]) -> None:
+        self._check_lock(8, "stop")
+        self.hal.set_running(False)
+
+    # ------------------------------------------------------------ aliases and locks
+    def do_alias(self, args: list[str]) -> None:
+        self._need(args, 3, 3, "alias pin|param name alias")
+        kind, real, alias = args
+        table, objects = self._alias_tables(kind)
+        if real not in self.hal.meta[objects]:
+            raise HalError(f"{kind} '{real}' not found")
+        with self.hal.edit() as meta:
+            if alias in meta["pins"] or alias in meta["params"] or alias in meta[table]:
+                raise HalError(f"duplicate name '{alias}'")
+            meta[table] = {k: v for k, v in meta[table].items() if v != real}
+            meta[table][alias] = real
+
+    def do_unalias(self, args: list[str]) -> None:
+        self._need(args, 2, 2, "unalias pin|param alias")
+        table, _ = self._alias_tables(args[0])
+        with self.hal.edit() as meta:
+            name = args[1]
+            if name not in meta[table]:
+                name = next((k for k, v in meta[table].items() if v == args[1]), "")
+            if not name:
+                raise HalError(f"alias '{args[1]}' not found")
+            del meta[table][name]
+
+    @staticmethod
+    def _alias_tables(kind: str) -> tuple[str, str]:
+        if kind == "pin":
+            return "pin_alias", "pins"
+        if kind in ("param", "parameter"):
+            return "param_alias", "params"
+        raise HalError(f"Unknown alias type '{kind}'")
+
+    def do_lock(self, args: list[str]) -> None:
+        level = LOCK_LEVELS.get(args[0] if args else "all")
+        if level is None:
+            raise HalError(f"Unknown lock type '{args[0]}'")
+        with self.hal.edit() as meta:
+            meta["lock"] = level
+
+    def do_unlock(self, args: list[str]) -> None:
+        level = LOCK_LEVELS.get(args[0] if args else "all")
+        if level is None:
+            raise HalError(f"Unknown unlock type '{args[0]}'")
+        with self.hal.edit() as meta:
+            meta["lock"] &= ~level
+
+    # ------------------------------------------------------------ misc
+    def do_echo(self, args: list[str]) -> None:
+        self.is_echo = True
+        print("Echo on", file=self.out)
+
+    def do_unecho(self, args: list[str]) -> None:
+        self.is_echo = False
+
+    def do_source(self, args: list[str]) -> None:
+        self._need(args, 1, 1, "source filename")
+        where = self.where
+        failures = self.run_file(args[0])
+        self.where = where
+        if failures:
+            raise HalError(f"source of '{args[0]}' failed")
+
+    def do_quit(self, args: list[str]) -> None:
+        self.is_quit = True
+
+    do_exit = do_quit
+
+    def do_help(self, args: list[str]) -> None:
+        if args:
+            text = HELP.get(args[0])
+            if text is None:
+                raise HalError(f"No help for unknown command '{args[0]}'")
+            print(text, file=self.out)
+            return
+        print("Available commands:", file=self.out)
+        for verb, text in HELP.items():
+            print(f"  {verb:<14} {text.splitlines()[0]}", file=self.out)
+
+    def do_status(self, args: list[str]) -> None:
+        meta = self.hal.meta
+        lock = meta["lock"]
+        lines = ["HAL locking status:", f"  current lock value {lock} ({lock:02x})"]
+        if not lock:
+            lines.append("  HAL_LOCK_NONE - nothing is locked")
+        for bit, text in (
+            (1, "HAL_LOCK_LOAD    - loading of new components is locked"),
+            (2, "HAL_LOCK_CONFIG  - link and addf is locked"),
+            (4, "HAL_LOCK_PARAMS  - setting params is locked"),
+            (8, "HAL_LOCK_RUN     - running/stopping HAL is locked"),
+        ):
+            if lock & bit:
+                lines.append(f"  {text}")
+        lines += [
+            "HAL memory status",
+            f"  used/total value slots:     {meta['next_slot'] - len(meta['free'])}/{NSLOTS}",
+            f"  active components:          {len(meta['comps'])}",
+            f"  active pins:                {len(meta['pins'])}",
+            f"  active parameters:          {len(meta['params'])}",
+            f"  active aliases:             {len(meta['pin_alias']) + len(meta['param_alias'])}",
+            f"  active signals:             {len(meta['sigs'])}",
+            f"  active functions:           {len(meta['functs'])}",
+            f"  active threads:             {len(meta['threads'])}",
+        ]
+        print("\n".join(lines), file=self.out)
+
+    # ------------------------------------------------------------ show / list / save
+    def do_show(self, args: list[str]) -> None:
+        from hal import show
+
+        kind = args[0] if args else "all"
+        pattern = args[1] if len(args) > 1 else None
+        print(show.show(self.hal, kind, pattern, is_script=self.is_script), file=self.out, end="")
+
+    def do_list(self, args: list[str]) -> None:
+        self._need(args, 1, 2, "list comp|pin|sig|param|funct|thread [pattern]")
+        from hal import show
+
+        print(show.listing(self.hal, args[0], args[1] if len(args) > 1 else None), file=self.out)
+
+    def do_save(self, args: list[str]) -> None:
+        from hal import show
+
+        kind = args[0] if args else "all"
+        modules = {}
+        if self.host.is_running():
+            modules = self.host.call({"cmd": "modules"}).get("modules", {})
+        text = show.save(self.hal, kind, modules)
+        if len(args) > 1:
+            Path(args[1]).write_text(text, encoding="utf-8")
+        else:
+            print(text, file=self.out, end="")
+
+    # ------------------------------------------------------------ interactive
+    def interactive(self, stream: TextIO) -> int:
+        failures = 0
+        is_tty = stream.isatty()
+        if is_tty:
+            with contextlib.suppress(ImportError):
+                import readline  # noqa: F401 - line editing and history for input()
+        number = 0
+        while not self.is_quit:
+            if is_tty:
+                try:
+                    line = input("halcmd: ")
+                except EOFError:
+                    break
+            else:
+                line = stream.readline()
+                if not line:
+                    break
+            number += 1
+            self.where = "" if is_tty else f"<stdin>:{number}"
+            if not self.run_line(line, number):
+                failures += 1
+        return failures
+
+
+HELP = {
+    "loadrt": "loadrt name [key=value...]\n  Loads realtime component 'name' into the host.",
+    "loadusr": "loadusr [-W|-w|-i|-n name] program [args...]\n  Starts a user space program;"
+    " -W waits for its component to be ready, -w for it to exit.",
+    "waitusr": "waitusr name\n  Waits for user space component 'name' to exit.",
+    "unload": "unload name|all\n  Unloads a component (realtime or user space).",
+    "unloadrt": "unloadrt name|all\n  Unloads a realtime component.",
+    "unloadusr": "unloadusr name|all\n  Stops a user space component.",
+    "net": "net signame [pin...]\n  Creates signal 'signame' if needed and links the pins.",
+    "newsig": "newsig signame type\n  Creates a signal of type bit, float, s32, u32, s64, u64.",
+    "delsig": "delsig signame|all\n  Deletes signals, unlinking their pins.",
+    "linkps": "linkps pinname signame\n  Links a pin to a signal.",
+    "linksp": "linksp signame pinname\n  Links a signal to a pin.",
+    "linkpp": "linkpp pin1 pin2\n  Links two pins through a signal named after the first.",
+    "unlinkp": "unlinkp pinname\n  Unlinks a pin from its signal.",
+    "setp": "setp name value\nname = value\n  Sets a parameter or an unconnected input pin.",
+    "getp": "getp name\n  Prints the value of a pin or parameter.",
+    "ptype": "ptype name\n  Prints the type of a pin or parameter.",
+    "sets": "sets signame value\n  Sets a signal that has no writer.",
+    "gets": "gets signame\n  Prints the value of a signal.",
+    "stype": "stype signame\n  Prints the type of a signal.",
+    "addf": "addf funcname threadname [position]\n  Adds a function to a thread.",
+    "delf": "delf funcname [threadname]\n  Removes a function from a thread.",
+    "start": "start\n  Starts running the realtime threads' functions.",
+    "stop": "stop\n  Stops running the realtime threads' functions.",
+    "show": "show [comp|pin|sig|param|funct|thread|alias|all] [pattern]\n  Shows HAL objects.",
+    "list": "list comp|pin|sig|param|funct|thread [pattern]\n  Lists names only.",
+    "save": "save [all|comp|alias|sig|net|netl|param|thread] [file]\n  Prints HAL commands"
+    " that rebuild the current configuration.",
+    "source": "source filename\n  Runs the commands of another HAL file.",
+    "alias": "alias pin|param name alias\n  Gives a pin or parameter a second name.",
+    "unalias": "unalias pin|param alias\n  Removes an alias.",
+    "lock": "lock [none|tune|all]\n  Locks HAL against changes.",
+    "unlock": "unlock [tune|all]\n  Unlocks HAL.",
+    "status": "status\n  Prints the HAL lock status and object counts.",
+    "echo": "echo\n  Echoes each command before running it.",
+    "unecho": "unecho\n  Stops echoing commands.",
+    "help": "help [command]\n  Lists commands or explains one.",
+    "quit": "quit\n  Leaves the interactive halcmd.",
+    "exit": "exit\n  Leaves the interactive halcmd.",
+}
+
+
+def parse_options(argv: list[str]) -> tuple[dict[str, Any], list[str]]:
+    """halcmd's getopt-style options; returns (options, remaining command words)."""
+    opts: dict[str, Any] = {
+        "file": None,
+        "ini": None,
+        "keep": False,
+        "script": False,
+        "verbosity": 1,
+        "echo": False,
+    }
+    args = list(argv)
+    while args and args[0].startswith("-") and len(args[0]) > 1:
+        flag = args.pop(0)
+        for index, letter in enumerate(flag[1:]):
+            rest = flag[index + 2 :]
+            if letter in "fi":
+                value = rest or (args.pop(0) if args and not args[0].startswith("-") else None)
+                if letter == "i" and value is None:
+                    raise HalError("-i needs an INI file")
+                opts["file" if letter == "f" else "ini"] = value if value is not None else "-"
+                break
+            if letter == "k":
+                opts["keep"] = True
+            elif letter == "s":
+                opts["script"] = True
+            elif letter == "q":
+                opts["verbosity"] = 1
+            elif letter == "Q":
+                opts["verbosity"] = 0
+            elif letter in "vV":
+                opts["verbosity"] = 2
+            elif letter == "e":
+                opts["echo"] = True
+            elif letter == "R":
+                pass  # mutex release: our mutex recovers itself after a timeout
+            elif letter == "h":
+                opts["help"] = True
+            else:
+                raise HalError(f"unknown option '-{letter}'")
+    return opts, args
+
+
+def make_session(opts: dict[str, Any], **kwargs: Any) -> HalCmd:
+    ini = None
+    if opts["ini"]:
+        from cnc.ini import IniFile
+
+        ini = IniFile.load(opts["ini"])
+    return HalCmd(
+        ini=ini,
+        is_keep_going=opts["keep"],
+        is_script=opts["script"],
+        verbosity=opts["verbosity"],
+        **kwargs,
+    )
+
+
+def run_session(session: HalCmd, opts: dict[str, Any], words: list[str]) -> int:
+    if opts["file"] and opts["file"] != "-":
+        failures = session.run_file(opts["file"])
+    elif words:
+        failures = 0 if session.run_words(words) else 1
+    else:
+        failures = session.interactive(sys.stdin)
+    return 1 if failures else 0
+
+
+def resolve_halfile(value: str, ini_dir: Path) -> Path:
+    """Where a ``[HAL]HALFILE`` value points: absolute, next to the INI file, or ``LIB:``."""
+    library = Path(__file__).resolve().parent / "lib"
+    if value.startswith("LIB:"):
+        path = library / value[4:]
+    else:
+        path = Path(value).expanduser()
+        if not path.is_absolute():
+            # next to the INI file, else in the HAL library (LinuxCNC's hallib)
+            path = ini_dir / path if (ini_dir / path).is_file() else library / path
+    if path.suffix == ".tcl":
+        raise HalError(f"HAL file '{value}': Tcl HAL files are not supported")
+    if not path.is_file():
+        raise HalError(f"HAL file '{value}' not found (looked for {path})")
+    return path
+
+
+def run_ini_halfiles(ini_path: str, *, is_postgui: bool = False, **kwargs: Any) -> int:
+    """Run an INI file's ``[HAL]HALFILE`` entries in order, then its ``[HAL]HALCMD`` lines,
+    as LinuxCNC's launcher does (``POSTGUI_HALFILE`` entries when ``is_postgui``).
+
+    Returns the number of failed commands; errors are printed as ``file:line: cause``.
+    The realtime host must already run (or is started by the first ``loadrt``).
+    """
+    from cnc.ini import IniFile
+
+    ini = IniFile.load(ini_path)
+    session = HalCmd(ini=ini, **kwargs)
+    failures = 0
+    try:
+        key = "POSTGUI_HALFILE" if is_postgui else "HALFILE"
+        for value in ini.findall("HAL", key):
+            try:
+                path = resolve_halfile(value, Path(ini_path).resolve().parent)
+            except HalError as exc:
+                session.where = f"{ini_path}: [HAL]{key}"
+                session.error(str(exc))
+                return failures + 1
+            failures += session.run_file(str(path))
+            if failures and not session.is_keep_going:
+                return failures
+        if not is_postgui:
+            for number, line in enumerate(ini.findall("HAL", "HALCMD"), 1):
+                session.where = f"{ini_path}: [HAL]HALCMD #{number}"
+                if not session.run_line(line, number):
+                    failures += 1
+                    if not session.is_keep_going:
+                        break
+        return failures
+    finally:
+        session.hal.close()
+
+
+def main(argv: list[str] | None = None) -> int:
+    try:
+        opts, words = parse_options(sys.argv[1:] if argv is None else argv)
+    except HalError as exc:
+        print(f"halcmd: {exc}", file=sys.stderr)
+        return 2
+    if opts.get("help"):
+        print(__doc__)
+        return 0
+    try:
+        session = make_session(opts)
+    except Exception as exc:  # a bad INI file: IniError carries file:line
+        print(f"halcmd: {exc}", file=sys.stderr)
+        return 1
+    try:
+        return run_session(session, opts, words)
+    finally:
+        if not session.host.is_running():
+            release_if_unused(session.hal)
+        session.hal.close()
+
+
+__all__ = ["DIR_NAMES", "HAL_IO", "HalCmd", "HostClient", "main"]

@@ -1,0 +1,520 @@
+"""The realtime host (LinuxCNC's rtapi_app): loads realtime components and runs HAL threads.
+
+Run as ``python -m hal.rtapi_app [--no-rt]``; halcmd starts it on the first ``loadrt``. It
+listens on an abstract unix socket for commands (loadrt, unloadrt, newthread, exit), one
+JSON object per line, answering ``{"ok": bool, "error": str}``. Pin values never pass
+through the socket: everyone reads and writes them in shared memory.
+
+Each HAL thread is an OS thread that sleeps to absolute deadlines (clock_nanosleep with
+TIMER_ABSTIME on CLOCK_MONOTONIC), then calls its functions in ``addf`` order. It runs
+SCHED_FIFO on the last CPU with memory locked when the system permits, and says once when it
+does not. The garbage collector is disabled (objects made while loading are frozen), so no
+collection pauses land in a period. Each thread publishes ``<thread>.time`` (pin) and
+``<thread>.tmax`` (param) like LinuxCNC, plus ``<thread>.overruns``: periods whose functions
+ran past the next deadline.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import ctypes
+import ctypes.util
+import gc
+import importlib
+import importlib.util
+import json
+import os
+import resource
+import signal
+import socket
+import sys
+import threading
+import time
+import traceback
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from hal.api import RtComponent, set_shared_hal
+from hal.core import HAL_BIT, HAL_OUT, HAL_RO, HAL_RW, HAL_S32, Hal, HalError
+from nml.ipcnames import ipc_name
+
+CLOCK_MONOTONIC = 1
+TIMER_ABSTIME = 1
+MCL_CURRENT, MCL_FUTURE = 1, 2
+RECOMMENDED_MEMLOCK_KIB = 20480
+RT_PRIORITY = 80
+S32_MAX = (1 << 31) - 1
+COMPONENTS_ENV = "CNC_HAL_COMPONENTS"
+SPIN_ENV = "CNC_HAL_SPIN_US"
+
+
+def socket_address() -> str:
+    """The host's abstract unix socket (no file to clean up)."""
+    return "\0" + ipc_name("hal", "rtapi")
+
+
+class _Timespec(ctypes.Structure):
+    _fields_ = [("tv_sec", ctypes.c_long), ("tv_nsec", ctypes.c_long)]
+
+
+_libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6", use_errno=True)
+_clock_nanosleep = _libc.clock_nanosleep
+_clock_nanosleep.argtypes = [
+    ctypes.c_int,
+    ctypes.c_int,
+    ctypes.POINTER(_Timespec),
+    ctypes.c_void_p,
+]
+
+
+def sleep_until(deadline_ns: int, spec: _Timespec) -> None:
+    """Sleep until CLOCK_MONOTONIC reaches ``deadline_ns`` (absolute, so no drift)."""
+    spec.tv_sec, spec.tv_nsec = divmod(deadline_ns, 1_000_000_000)
+    while _clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, ctypes.byref(spec), None) == 4:
+        pass  # EINTR: a signal arrived; sleep again to the same deadline
+
+
+def parse_module_args(words: list[str]) -> dict[str, str]:
+    """LinuxCNC's ``key=value`` loadrt arguments (values may be quoted)."""
+    args: dict[str, str] = {}
+    for word in words:
+        key, sep, value = word.partition("=")
+        if not sep or not key:
+            raise HalError(f"bad module argument '{word}' (want key=value)")
+        args[key] = value.strip('"')
+    return args
+
+
+class _Funct:
+    """One HAL function as a thread calls it, with its timing pin and params."""
+
+    __slots__ = ("call", "is_disabled", "name", "time", "tmax", "tmax_increased")
+
+    def __init__(self, hal: Hal, comp: str, name: str, call: Callable[[int], None]) -> None:
+        self.name = name
+        self.call = call
+        self.is_disabled = False
+        self.time = hal.new_pin(comp, f"{name}.time", HAL_S32, HAL_OUT)
+        self.tmax = hal.new_param(comp, f"{name}.tmax", HAL_S32, HAL_RW)
+        self.tmax_increased = hal.new_param(comp, f"{name}.tmax-increased", HAL_BIT, HAL_RO)
+
+
+class RtThread(threading.Thread):
+    """One periodic HAL thread."""
+
+    def __init__(self, host: Host, name: str, period_ns: int, cpu: int | None) -> None:
+        super().__init__(name=f"hal-{name}", daemon=True)
+        self.host = host
+        self.hal_name = name
+        self.period = int(period_ns)
+        self.cpu = cpu
+        self.is_stopping = False
+        self.creator = ""
+        comp = f"__{name}"
+        hal = host.hal
+        hal.new_component(comp, "rt")
+        self.comp = comp
+        # slots of the thread's timing pin and parameters
+        self.time = hal.new_pin(comp, f"{name}.time", HAL_S32, HAL_OUT)
+        self.tmax = hal.new_param(comp, f"{name}.tmax", HAL_S32, HAL_RW)
+        self.overruns = hal.new_param(comp, f"{name}.overruns", HAL_S32, HAL_RO)
+        hal.new_thread(comp, name, self.period)
+        hal.ready(comp)
+        #: when set (benchmarks), lateness of each period in ns is stored here in turn
+        self.lateness_log: list[int] | None = None
+
+    def _chain(self) -> tuple[int, bool, list[_Funct]]:
+        hal = self.host.hal
+        with hal._locked():
+            meta = hal.snapshot()
+            gen = hal.generation
+        info = meta["threads"].get(self.hal_name)
+        names = info["functs"] if info else []
+        functs = self.host.functs
+        return gen, bool(meta["is_running"]), [functs[n] for n in names if n in functs]
+
+    def run(self) -> None:
+        self.host.make_realtime(self.cpu)
+        hal = self.host.hal
+        period = self.period
+        spec = _Timespec()
+        clock = time.monotonic_ns
+        deadline = (clock() // period + 1) * period
+        gen, is_running, chain = -1, False, []
+        q, ptr = hal.q, hal.ptr
+        spin = self.host.spin_ns
+        while not self.is_stopping:
+            sleep_until(deadline - spin, spec)
+            start = clock()
+            while start < deadline:  # optional busy wait: trades CPU for wake-up latency
+                start = clock()
+            log = self.lateness_log
+            if log is not None:
+                log.append(start - deadline)
+            if hal._header[0] != gen:
+                gen, is_running, chain = self._chain()
+            if is_running:
+                before = start
+                for entry in chain:
+                    if entry.is_disabled:
+                        continue
+                    try:
+                        entry.call(period)
+                    except Exception:
+                        entry.is_disabled = True
+                        print(
+                            f"HAL: function '{entry.name}' failed and is disabled:", file=sys.stderr
+                        )
+                        traceback.print_exc()
+                    after = clock()
+                    spent = min(after - before, S32_MAX)
+                    q[ptr[entry.time]] = spent
+                    if spent > q[entry.tmax]:
+                        q[entry.tmax] = spent
+                        q[entry.tmax_increased] = 1
+                    before = after
+            end = clock()
+            if is_running:
+                spent = min(end - start, S32_MAX)
+                q[ptr[self.time]] = spent
+                if spent > q[self.tmax]:
+                    q[self.tmax] = spent
+            deadline += period
+            if end > deadline:
+                q[self.overruns] += 1
+                deadline += ((end - deadline) // period + 1) * period
+
+
+class LoadedModule:
+    def __init__(self, name: str, comp: str, instances: list[Any], functs: list[str]) -> None:
+        self.name, self.comp, self.instances, self.functs = name, comp, instances, functs
+        self.args = ""
+
+
+class Host:
+    """The realtime host's state: loaded modules, functions and threads."""
+
+    def __init__(self, hal: Hal, *, is_rt: bool = True, spin_us: int = 0) -> None:
+        self.hal = hal
+        self.is_rt = is_rt
+        #: wake up this early and busy-wait to the deadline (0: plain absolute sleep)
+        self.spin_ns = max(int(spin_us), 0) * 1000
+        self.modules: dict[str, LoadedModule] = {}
+        self.functs: dict[str, _Funct] = {}
+        self.threads: dict[str, RtThread] = {}
+        self._warned: set[str] = set()
+        self.is_exiting = threading.Event()
+        set_shared_hal(hal)
+
+    # ------------------------------------------------------------ realtime setup
+    def warn_once(self, key: str, text: str) -> None:
+        if key not in self._warned:
+            self._warned.add(key)
+            print(text, file=sys.stderr, flush=True)
+
+    def lock_memory(self) -> None:
+        """mlockall when the locked-memory limit allows it; otherwise say why (ARCH-017)."""
+        if not self.is_rt:
+            return
+        soft, _ = resource.getrlimit(resource.RLIMIT_MEMLOCK)
+        is_privileged = os.geteuid() == 0
+        if not is_privileged and soft != resource.RLIM_INFINITY:
+            kib = soft // 1024
+            self.warn_once(
+                "memlock",
+                f"RTAPI: Locked memory limit is {kib}KiB, recommended at least "
+                f"{RECOMMENDED_MEMLOCK_KIB}KiB (set 'memlock {RECOMMENDED_MEMLOCK_KIB}' in "
+                "/etc/security/limits.conf); memory is not locked",
+            )
+            return
+        if _libc.mlockall(MCL_CURRENT | MCL_FUTURE) != 0:
+            err = ctypes.get_errno()
+            self.warn_once("memlock", f"RTAPI: cannot lock memory: {os.strerror(err)}")
+
+    def prepare(self) -> None:
+        """Process-wide realtime setup: lock memory, keep the GC and long GIL holds away."""
+        self.lock_memory()
+        sys.setswitchinterval(0.0001)  # a thread waking on time gets the GIL quickly
+        gc.disable()  # no collection pauses inside a period; loadrt freezes what it made
+        gc.freeze()
+
+    def make_realtime(self, cpu: int | None) -> None:
+        """Run the calling thread on ``cpu`` with SCHED_FIFO where permitted."""
+        if not self.is_rt:
+            return
+        if cpu is not None:
+            try:
+                os.sched_setaffinity(0, {cpu})
+            except OSError as exc:
+                self.warn_once("affinity", f"RTAPI: cannot pin thread to CPU {cpu}: {exc}")
+        try:
+            os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(RT_PRIORITY))
+        except (OSError, AttributeError) as exc:
+            self.warn_once(
+                "fifo",
+                f"RTAPI: realtime scheduling (SCHED_FIFO) not permitted ({exc}); "
+                "running with normal priority, expect more latency",
+            )
+
+    # ------------------------------------------------------------ modules
+    @staticmethod
+    def import_module(name: str) -> Any:
+        if name.endswith(".py") or "/" in name:
+            path = Path(name)
+            spec = importlib.util.spec_from_file_location(f"halcomp_{path.stem}", path)
+            if spec is None or spec.loader is None or not path.is_file():
+                raise HalError(f"{name}: component file not found")
+            module = importlib.util.module_from_spec(spec)
+            spec.loader.exec_module(module)
+            return module
+        for folder in filter(None, os.environ.get(COMPONENTS_ENV, "").split(os.pathsep)):
+            candidate = Path(folder) / f"{name}.py"
+            if candidate.is_file():
+                return Host.import_module(str(candidate))
+        try:
+            return importlib.import_module(f"hal.components.{name}")
+        except ModuleNotFoundError as exc:
+            if exc.name and exc.name.startswith("hal.components"):
+                raise HalError(f"{name}: realtime component not found") from None
+            raise
+
+    def loadrt(self, name: str, words: list[str], comp_name: str = "") -> None:
+        """Load a realtime module; ``comp_name`` names its HAL component (default: module)."""
+        module = self.import_module(name)
+        comp_name = comp_name or Path(name).stem
+        if comp_name in self.modules:
+            raise HalError(f"{comp_name}: module already loaded")
+        args = parse_module_args(words)
+        if hasattr(module, "rtapi_app_main"):
+            self.hal.new_component(comp_name, "rt", args=" ".join(words))
+            loaded = LoadedModule(comp_name, comp_name, [], [])
+            try:
+                module.rtapi_app_main(self, comp_name, args)
+            except Exception:
+                self._remove(comp_name)
+                raise
+        elif hasattr(module, "COMPONENT"):
+            cls: type[RtComponent] = module.COMPONENT
+            loaded = self._load_component(cls, comp_name, args)
+        else:
+            raise HalError(f"{name}: not a HAL component (no COMPONENT or rtapi_app_main)")
+        loaded.args = " ".join(words)
+        self.modules[comp_name] = loaded
+        self.hal.ready(comp_name)
+        gc.collect()
+        gc.freeze()
+
+    def _load_component(
+        self, cls: type[RtComponent], comp_name: str, args: dict[str, str]
+    ) -> LoadedModule:
+        wanted = cls.instances(comp_name, args)
+        self.hal.new_component(comp_name, "rt")
+        loaded = LoadedModule(comp_name, comp_name, [], [])
+        try:
+            for inst_name, options in wanted:
+                inst = cls.create(self.hal, comp_name, inst_name, options)
+                loaded.instances.append(inst)
+                for fname, uses_fp, method, is_module in cls.functs():
+                    if is_module:
+                        continue
+                    full = f"{inst_name}.{fname}" if fname else inst_name
+                    self.add_function(comp_name, full, getattr(inst, method), uses_fp)
+                    loaded.functs.append(full)
+            for fname, uses_fp, method, is_module in cls.functs():
+                if is_module:
+                    full = f"{cls.prefix or comp_name.replace('_', '-')}.{fname}"
+                    bound = getattr(cls, method)
+                    instances = loaded.instances
+                    self.add_function(
+                        comp_name, full, lambda period, b=bound, i=instances: b(i, period), uses_fp
+                    )
+                    loaded.functs.append(full)
+        except Exception:
+            self._remove(comp_name)
+            raise
+        return loaded
+
+    def add_function(
+        self, comp: str, name: str, call: Callable[[int], None], uses_fp: bool = True
+    ) -> None:
+        """Export a function that threads may run (components and special modules use this)."""
+        self.hal.new_funct(comp, name, uses_fp=uses_fp)
+        self.functs[name] = _Funct(self.hal, comp, name, call)
+
+    def new_thread(
+        self, name: str, period_ns: int, creator: str = "", cpu: int | None = None
+    ) -> RtThread:
+        if name in self.hal.meta["threads"]:
+            raise HalError(f"duplicate thread name '{name}'")
+        if period_ns < 1000:
+            raise HalError(f"thread '{name}': period {period_ns} ns is too short")
+        if cpu is None:
+            cpu = (os.cpu_count() or 1) - 1
+        thread = RtThread(self, name, period_ns, cpu)
+        thread.creator = creator
+        self.threads[name] = thread
+        thread.start()
+        return thread
+
+    def _remove(self, comp: str) -> None:
+        for name, thread in list(self.threads.items()):
+            if thread.creator == comp:
+                self._stop_thread(name)
+        for name in [n for n, f in self.hal.meta["functs"].items() if f["owner"] == comp]:
+            self.functs.pop(name, None)
+        with contextlib.suppress(HalError):
+            self.hal.remove_component(comp)
+
+    def _stop_thread(self, name: str) -> None:
+        thread = self.threads.pop(name)
+        thread.is_stopping = True
+        thread.join(timeout=2)
+        with contextlib.suppress(HalError):
+            self.hal.remove_component(thread.comp)
+
+    def unloadrt(self, name: str) -> None:
+        if name not in self.modules:
+            raise HalError(f"component '{name}' not loaded")
+        loaded = self.modules.pop(name)
+        self._remove(name)
+        if loaded.instances and self.threads:
+            # let every thread finish its current period before the instances go away
+            time.sleep(2 * max(t.period for t in self.threads.values()) / 1e9)
+        for inst in loaded.instances:
+            try:
+                inst.teardown()
+            except Exception:
+                traceback.print_exc()
+
+    def unload_all(self) -> None:
+        for name in reversed(list(self.modules)):
+            self.unloadrt(name)
+        for name in list(self.threads):
+            self._stop_thread(name)
+
+    # ------------------------------------------------------------ command channel
+    def handle(self, request: dict[str, Any]) -> dict[str, Any]:
+        command = request.get("cmd")
+        try:
+            if command == "ping":
+                return {"ok": True, "pid": os.getpid()}
+            if command == "loadrt":
+                self.loadrt(request["name"], list(request.get("args", [])), request.get("comp", ""))
+            elif command in ("unloadrt", "unloadall"):
+                if command == "unloadrt":
+                    self.unloadrt(request["name"])
+                else:
+                    self.unload_all()
+                if not self.modules and not self.threads:
+                    # like LinuxCNC's rtapi_app: the host leaves with its last module
+                    self.is_exiting.set()
+            elif command == "modules":
+                return {"ok": True, "modules": {n: m.args for n, m in self.modules.items()}}
+            elif command == "exit":
+                self.is_exiting.set()
+            else:
+                return {"ok": False, "error": f"unknown host command '{command}'"}
+        except HalError as exc:
+            return {"ok": False, "error": str(exc)}
+        except Exception as exc:
+            traceback.print_exc()
+            return {"ok": False, "error": f"{type(exc).__name__}: {exc}"}
+        return {"ok": True}
+
+    def serve(self, server: socket.socket) -> None:
+        server.settimeout(0.2)
+        while not self.is_exiting.is_set():
+            try:
+                conn, _ = server.accept()
+            except TimeoutError:
+                continue
+            with conn:
+                conn.settimeout(30)
+                stream = conn.makefile("rwb")
+                for line in stream:
+                    try:
+                        request = json.loads(line)
+                    except ValueError:
+                        reply = {"ok": False, "error": "malformed request"}
+                    else:
+                        reply = self.handle(request)
+                    stream.write(json.dumps(reply).encode() + b"\n")
+                    stream.flush()
+                    if self.is_exiting.is_set():
+                        break
+
+    def shutdown(self) -> None:
+        with contextlib.suppress(Exception):
+            self.unload_all()
+
+
+def release_if_unused(hal: Hal) -> bool:
+    """Unlink the HAL segments when no live component is left; True when removed."""
+    with hal.edit() as meta:
+        for name, comp in list(meta["comps"].items()):
+            if comp["kind"] == "user" and not is_alive(comp["pid"]):
+                hal.remove_component(name)
+        is_unused = not meta["comps"]
+    if is_unused:
+        hal.destroy()
+    return is_unused
+
+
+def is_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def _env_int(name: str) -> int:
+    text = os.environ.get(name, "") or "0"
+    try:
+        return int(text)
+    except ValueError:
+        print(f"rtapi_app: ignoring ${name}={text!r} (not a whole number)", file=sys.stderr)
+        return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="rtapi_app", description=__doc__.splitlines()[0])
+    parser.add_argument("--no-rt", action="store_true", help="no SCHED_FIFO, no mlockall")
+    parser.add_argument(
+        "--spin-us",
+        type=int,
+        default=_env_int(SPIN_ENV),
+        help=f"wake this early and busy-wait to each deadline (default ${SPIN_ENV} or 0)",
+    )
+    opts = parser.parse_args(argv)
+    server = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    try:
+        server.bind(socket_address())
+    except OSError:
+        print("rtapi_app: a realtime host is already running for this instance", file=sys.stderr)
+        return 1
+    server.listen(8)
+    hal = Hal()
+    is_rt = not opts.no_rt and os.environ.get("CNC_HAL_NO_RT") != "1"
+    host = Host(hal, is_rt=is_rt, spin_us=opts.spin_us)
+    host.prepare()
+    for signum in (signal.SIGTERM, signal.SIGINT, signal.SIGHUP):
+        signal.signal(signum, lambda *_: host.is_exiting.set())
+    print("rtapi_app: ready", flush=True)
+    try:
+        host.serve(server)
+    finally:
+        server.close()
+        host.shutdown()
+        set_shared_hal(None)
+        release_if_unused(hal)
+        hal.close()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

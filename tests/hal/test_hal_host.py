@@ -1,0 +1,82 @@
+"""The realtime host: thread timing parameters, overruns, failing functions, RT setup."""
+
+from __future__ import annotations
+
+import resource
+import sys
+from pathlib import Path
+
+import pytest
+
+from hal.core import Hal
+from hal.rtapi_app import Host
+from tests.hal.halrun_util import FILES, halrun_text
+
+SLEEP = f"loadusr -w {sys.executable} -c 'import time; time.sleep(0.05)'\n"
+
+
+def test_thread_and_functions_publish_time_and_tmax(tmp_path: Path) -> None:
+    text = (
+        "loadrt threads name1=servo-thread period1=1000000\nloadrt and2\n"
+        "addf and2.0 servo-thread\nstart\n"
+        + SLEEP
+        + "getp servo-thread.tmax\ngetp and2.0.tmax\ngetp and2.0.tmax-increased\n"
+        "getp servo-thread.time\n"
+    )
+    result = halrun_text(tmp_path, text)
+    assert result.returncode == 0, result.stderr
+    thread_tmax, funct_tmax, increased, thread_time = result.stdout.split()
+    assert int(thread_tmax) >= int(funct_tmax) > 0
+    assert increased == "TRUE"
+    assert 0 < int(thread_time) <= int(thread_tmax)
+
+
+def test_overruns_are_counted(tmp_path: Path) -> None:
+    text = (
+        "loadrt threads name1=servo-thread period1=1000000\n"
+        f"loadrt {FILES / 'slow.py'}\naddf slow.0 servo-thread\nstart\n"
+        + SLEEP
+        + "getp servo-thread.overruns\ngetp slow.0.calls\n"
+    )
+    result = halrun_text(tmp_path, text)
+    assert result.returncode == 0, result.stderr
+    overruns, calls = (int(word) for word in result.stdout.split())
+    assert overruns >= calls - 1 > 0
+
+
+def test_a_failing_function_is_disabled_and_others_keep_running(tmp_path: Path) -> None:
+    text = (
+        "loadrt threads name1=servo-thread period1=1000000\n"
+        f"loadrt {FILES / 'broken.py'}\nloadrt not\n"
+        "addf broken.0 servo-thread\naddf not.0 servo-thread\nstart\n"
+        + SLEEP
+        + "getp broken.0.calls\ngetp not.0.out\n"
+    )
+    result = halrun_text(tmp_path, text)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.split() == ["1", "TRUE"]
+    assert "function 'broken.0' failed and is disabled" in result.stderr
+    assert result.stderr.count("RuntimeError: broken on purpose") == 1
+
+
+def test_small_memlock_limit_is_reported_once_with_the_recommendation(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    monkeypatch.setattr("os.geteuid", lambda: 1000)
+    monkeypatch.setattr(resource, "getrlimit", lambda _: (8192 * 1024, 8192 * 1024))
+    hal = Hal()
+    try:
+        host = Host(hal)
+        host.lock_memory()
+        host.lock_memory()
+    finally:
+        hal.destroy()
+        hal.close()
+    err = capsys.readouterr().err
+    assert err.count("Locked memory limit is 8192KiB, recommended at least 20480KiB") == 1
+
+
+def test_loadrt_errors_leave_nothing_half_loaded(tmp_path: Path) -> None:
+    result = halrun_text(tmp_path, "loadrt pid num_chan=x\nlist comp\n", "-k")
+    assert "pid: count must be a number" in result.stderr
+    assert result.stdout.strip() == ""
