@@ -1,0 +1,288 @@
+"""``loadrt motmod``: the motion controller as a realtime HAL module (MOT-008..018, ARCH-007).
+
+    loadrt trivkins coordinates=XYZ
+    loadrt motmod servo_period_nsec=1000000 num_joints=3 [num_spindles=1 num_dio=4 num_aio=4]
+    addf motion-command-handler servo-thread
+    addf motion-controller servo-thread
+
+It exports LinuxCNC's pins (``motion.*``, ``joint.N.*``, ``axis.L.*``, ``spindle.N.*``) and
+two functions. ``motion-command-handler`` takes the commands task queued on ``motCommand``
+and answers each on ``motStatus`` (echoed serial number, DONE or ERROR; refusals also go to
+``emcError`` as operator errors). ``motion-controller`` runs one servo period of
+``MotionController`` and publishes EMC_MOTION_STAT.
+
+Nothing here may block the servo thread: the NML connections use the ``motion`` P lines
+of the NML file ([EMC]NML_FILE via ``$CNC_NML_FILE``, default configs/common/cnc.nml),
+whose timeout 0 makes a busy buffer fail at once; a command then waits for the next period
+and an error message stays pending until it can be written.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+from typing import Any
+
+from hal.api import RtComponent, pin
+from hal.core import HalError
+from motion.controller import COORD, TELEOP, Inputs, MotionController
+from motion.kinematics import KinematicsError, load_kinematics
+from motion.pose import AXIS_LETTERS
+from nml import emc
+from nml.channels import EMC_ERROR, MOTION_COMMAND, MOTION_STATUS, Nml, load_config
+from nml.errors import NmlError, NmlTimeoutError
+from nml.message import RCS_STATUS
+
+NML_PROCESS = "motion"
+MAX_COMMANDS_PER_PERIOD = 20  # bounds the command handler's time in one period
+
+
+class MotionPins(RtComponent):
+    enable = pin("bit in", default=1)
+    probe_input = pin("bit in")
+    motion_enabled = pin("bit out")
+    in_position = pin("bit out")
+    coord_mode = pin("bit out")
+    teleop_mode = pin("bit out")
+    on_soft_limit = pin("bit out")
+    program_line = pin("s32 out")
+    current_vel = pin("float out")
+    distance_to_go = pin("float out")
+    digital_out = pin("bit out", "digital-out-{:02d}", count="num_dio")
+    digital_in = pin("bit in", "digital-in-{:02d}", count="num_dio")
+    analog_out = pin("float out", "analog-out-{:02d}", count="num_aio")
+    analog_in = pin("float in", "analog-in-{:02d}", count="num_aio")
+
+    def setup(self, num_dio: int = 4, num_aio: int = 4) -> None:
+        pass
+
+
+class JointPins(RtComponent):
+    motor_pos_cmd = pin("float out")
+    motor_pos_fb = pin("float in")
+    motor_offset = pin("float out")
+    pos_cmd = pin("float out")
+    pos_fb = pin("float out")
+    vel_cmd = pin("float out")
+    f_error = pin("float out")
+    f_errored = pin("bit out")
+    amp_enable_out = pin("bit out")
+    amp_fault_in = pin("bit in")
+    home_sw_in = pin("bit in")
+    homing = pin("bit out")
+    homed = pin("bit out")
+    in_position = pin("bit out")
+    pos_lim_sw_in = pin("bit in")
+    neg_lim_sw_in = pin("bit in")
+    index_enable = pin("bit io")
+
+
+class AxisPins(RtComponent):
+    pos_cmd = pin("float out")
+    teleop_pos_cmd = pin("float out")
+
+
+class SpindlePins(RtComponent):
+    speed_out = pin("float out")
+    speed_out_rps = pin("float out")
+    speed_out_abs = pin("float out")
+    on = pin("bit out")
+    forward = pin("bit out")
+    reverse = pin("bit out")
+    brake = pin("bit out")
+    at_speed = pin("bit in", default=1)
+    speed_in = pin("float in")
+
+
+class Motmod:
+    """The pins, the controller and the NML connections of one loaded motmod."""
+
+    def __init__(self, host: Any, comp: str, args: dict[str, str]) -> None:
+        options = _options(args)
+        kins = _kinematics(host)
+        period_s = options["servo_period_nsec"] / 1e9
+        self.controller = MotionController(
+            kins,
+            options["num_joints"],
+            period_s,
+            num_spindles=options["num_spindles"],
+            num_dio=options["num_dio"],
+            num_aio=options["num_aio"],
+        )
+        hal = host.hal
+        io = {"num_dio": options["num_dio"], "num_aio": options["num_aio"]}
+        self.motion = MotionPins.create(hal, comp, "motion", io)
+        self.joints = [
+            JointPins.create(hal, comp, f"joint.{i}") for i in range(options["num_joints"])
+        ]
+        letters = [AXIS_LETTERS[i] for i in range(9) if getattr(kins, "axis_mask", 0b111) >> i & 1]
+        self.axes = {
+            AXIS_LETTERS.index(c): AxisPins.create(hal, comp, f"axis.{c}") for c in letters
+        }
+        self.spindles = [
+            SpindlePins.create(hal, comp, f"spindle.{i}") for i in range(options["num_spindles"])
+        ]
+        try:
+            config = load_config(os.environ.get("CNC_NML_FILE") or None)
+            self.nml = Nml(config, NML_PROCESS, [MOTION_COMMAND, MOTION_STATUS, EMC_ERROR])
+        except NmlError as exc:
+            raise HalError(f"motmod: cannot connect to the NML buffers: {exc}") from None
+        self.status = emc.EMC_MOTION_STAT()
+        self.pending_errors: list[str] = []
+        self.inputs = Inputs(
+            motor_pos_fb=[0.0] * len(self.joints),
+            pos_limit=[False] * len(self.joints),
+            neg_limit=[False] * len(self.joints),
+            amp_fault=[False] * len(self.joints),
+        )
+        host.add_function(comp, "motion-command-handler", self.command_handler)
+        host.add_function(comp, "motion-controller", self.controller_period)
+
+    # ------------------------------------------------------------------ functions
+    def command_handler(self, period: int) -> None:
+        """Carry out the commands queued since the last period (MOT-009)."""
+        commands = self.nml[MOTION_COMMAND]
+        for _ in range(MAX_COMMANDS_PER_PERIOD):
+            try:
+                cmd = commands.read()
+            except NmlTimeoutError:
+                break  # busy this instant: next period
+            except NmlError as exc:
+                self.pending_errors.append(f"motion: bad command: {exc}")
+                continue
+            if cmd is None:
+                break
+            problem = self.controller.handle(cmd)
+            status = self.status
+            status.command_type = cmd.TYPE
+            status.echo_serial_number = cmd.serial_number
+            status.status = RCS_STATUS.DONE if problem is None else RCS_STATUS.ERROR
+            if problem:
+                self.pending_errors.extend(problem.splitlines())
+
+    def controller_period(self, period: int) -> None:
+        """One servo period: pins in, controller, pins out, status out (MOT-010..016)."""
+        inputs = self.inputs
+        for index, pins in enumerate(self.joints):
+            inputs.motor_pos_fb[index] = pins.motor_pos_fb
+            inputs.pos_limit[index] = pins.pos_lim_sw_in
+            inputs.neg_limit[index] = pins.neg_lim_sw_in
+            inputs.amp_fault[index] = pins.amp_fault_in
+        motion_pins = self.motion
+        inputs.probe = motion_pins.probe_input
+        inputs.enable = motion_pins.enable
+        inputs.digital_in = list(motion_pins.digital_in)
+        inputs.analog_in = list(motion_pins.analog_in)
+        controller = self.controller
+        controller.update(inputs)
+        self._write_pins()
+        self.pending_errors.extend(controller.errors)
+        controller.errors.clear()
+        controller.fill_status(self.status)
+        self._publish()
+
+    def _write_pins(self) -> None:
+        controller = self.controller
+        for joint, pins in zip(controller.joints, self.joints, strict=True):
+            pins.pos_cmd = joint.pos_cmd
+            pins.motor_pos_cmd = joint.pos_cmd + joint.motor_offset
+            pins.motor_offset = joint.motor_offset
+            pins.pos_fb = joint.pos_fb
+            pins.vel_cmd = joint.vel_cmd
+            pins.f_error = joint.ferror
+            pins.amp_enable_out = controller.is_enabled
+            pins.homed = joint.is_homed
+            pins.homing = joint.is_homing
+            pins.in_position = joint.is_in_position
+        pose = list(controller.carte_pos_cmd)
+        for index, pins in self.axes.items():
+            pins.pos_cmd = pose[index]
+        motion = self.motion
+        motion.motion_enabled = controller.is_enabled
+        motion.in_position = controller.is_in_position
+        motion.coord_mode = controller.mode == COORD
+        motion.teleop_mode = controller.mode == TELEOP
+        motion.program_line = controller.tp.motion_id
+        motion.current_vel = controller.tp.vel
+        motion.distance_to_go = controller.tp.distance_to_go
+        for index, value in enumerate(controller.digital_out):
+            motion.digital_out[index] = value
+        for index, value in enumerate(controller.analog_out):
+            motion.analog_out[index] = value
+        for spindle, pins in zip(controller.spindles, self.spindles, strict=True):
+            speed = spindle.speed * spindle.scale
+            pins.speed_out = speed
+            pins.speed_out_rps = speed / 60.0
+            pins.speed_out_abs = abs(speed)
+            pins.on = speed != 0
+            pins.forward = speed > 0
+            pins.reverse = speed < 0
+            pins.brake = spindle.is_brake_on
+
+    def _publish(self) -> None:
+        with contextlib.suppress(NmlTimeoutError):  # busy this instant: next period publishes
+            self.nml[MOTION_STATUS].write(self.status)
+        errors = self.nml[EMC_ERROR]
+        while self.pending_errors:
+            try:
+                errors.write(emc.EMC_OPERATOR_ERROR(error=self.pending_errors[0][:255]))
+            except NmlTimeoutError:
+                return
+            self.pending_errors.pop(0)
+
+
+def rtapi_app_main(host: Any, comp: str, args: dict[str, str]) -> None:
+    host.motmod = Motmod(host, comp, args)
+
+
+_INT_OPTIONS = {
+    "servo_period_nsec": 1_000_000,
+    "traj_period_nsec": 0,
+    "num_joints": 3,
+    "num_spindles": 1,
+    "num_dio": 4,
+    "num_aio": 4,
+    "num_extrajoints": 0,
+    "unlock_joints_mask": 0,
+}
+_LIMITS = {
+    "num_joints": (1, emc.EMCMOT_MAX_JOINTS),
+    "num_spindles": (1, emc.EMCMOT_MAX_SPINDLES),
+    "num_dio": (0, emc.EMCMOT_MAX_DIO),
+    "num_aio": (0, emc.EMCMOT_MAX_AIO),
+}
+
+
+def _options(args: dict[str, str]) -> dict[str, int]:
+    unknown = set(args) - set(_INT_OPTIONS) - {"base_period_nsec", "kins"}
+    if unknown:
+        raise HalError(f"motmod: unknown argument '{sorted(unknown)[0]}'")
+    options = dict(_INT_OPTIONS)
+    for key, text in args.items():
+        if key in _INT_OPTIONS:
+            try:
+                options[key] = int(text, 0)
+            except ValueError:
+                raise HalError(f"motmod: {key}={text} is not an integer") from None
+    for key, (low, high) in _LIMITS.items():
+        if not low <= options[key] <= high:
+            raise HalError(f"motmod: {key}={options[key]} out of range {low}..{high}")
+    if options["servo_period_nsec"] < 10_000:
+        raise HalError(f"motmod: servo_period_nsec={options['servo_period_nsec']} is too short")
+    return options
+
+
+def _kinematics(host: Any):
+    """The kinematics loaded before motmod (``loadrt trivkins ...``), as LinuxCNC requires."""
+    kins = getattr(host, "kinematics", None)
+    if kins is None:
+        raise HalError("motmod: no kinematics loaded; loadrt [KINS]KINEMATICS before motmod")
+    return kins
+
+
+def load_kinematics_module(host: Any, name: str, args: dict[str, str]) -> None:
+    """``loadrt trivkins coordinates=XYZ`` and friends: make the host's kinematics."""
+    try:
+        host.kinematics = load_kinematics(name, **args)
+    except (KinematicsError, ValueError, TypeError) as exc:
+        raise HalError(f"{name}: {exc}") from None

@@ -1,0 +1,178 @@
+"""motmod in a real realtime host: HAL file, NML commands, joint pins, status (MOT-008..018)."""
+
+from __future__ import annotations
+
+import signal
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from hal.core import Hal
+from nml import emc
+from nml.channels import EMC_ERROR, MOTION_COMMAND, MOTION_STATUS, Nml, load_config
+from nml.message import RCS_STATUS
+from tests.hal.halrun_util import run_cnc
+
+MOTION_HAL = """\
+loadrt threads name1=servo-thread period1=1000000
+loadrt trivkins coordinates=XYZ
+loadrt motmod servo_period_nsec=1000000 num_joints=3 num_dio=2 num_aio=1
+addf motion-command-handler servo-thread
+addf motion-controller servo-thread
+net j0 joint.0.motor-pos-cmd => joint.0.motor-pos-fb
+net j1 joint.1.motor-pos-cmd => joint.1.motor-pos-fb
+net j2 joint.2.motor-pos-cmd => joint.2.motor-pos-fb
+start
+"""
+
+
+class Task:
+    """The test plays task: it sends motion commands and waits for their echo."""
+
+    def __init__(self) -> None:
+        config = load_config()
+        self.master = Nml(config, "cnc", [MOTION_COMMAND, MOTION_STATUS, EMC_ERROR])
+        self.task = Nml(config, "emc", [MOTION_COMMAND, MOTION_STATUS])
+        self.ui = Nml(config, "xemc", [EMC_ERROR])
+
+    def send(self, cmd: emc.NMLmsg, timeout: float = 10) -> emc.EMC_MOTION_STAT:
+        serial = self.task[MOTION_COMMAND].write(cmd)
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            stat = self.task[MOTION_STATUS].blocking_read(1)
+            if (
+                stat is not None
+                and stat.echo_serial_number == serial
+                and stat.status
+                in (
+                    RCS_STATUS.DONE,
+                    RCS_STATUS.ERROR,
+                )
+            ):
+                return stat
+        raise AssertionError(f"no answer to {cmd.NAME}")
+
+    def wait_for(self, condition, timeout: float = 20) -> emc.EMC_MOTION_STAT:
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            stat = self.task[MOTION_STATUS].blocking_read(1)
+            if stat is not None and condition(stat):
+                return stat
+        raise AssertionError("condition not reached")
+
+    def errors(self) -> list[str]:
+        found = []
+        while (msg := self.ui[EMC_ERROR].read()) is not None:
+            found.append(msg.error)
+        return found
+
+    def close(self) -> None:
+        for nml in (self.ui, self.task, self.master):
+            nml.close()
+
+
+@pytest.fixture
+def machine(procs, tmp_path: Path) -> Iterator[Task]:
+    task = Task()
+    host = procs.python("-m", "hal.rtapi_app", "--no-rt")
+    try:
+        assert host.stdout.readline().strip() == "rtapi_app: ready"
+        hal_file = tmp_path / "motion.hal"
+        hal_file.write_text(MOTION_HAL)
+        loaded = run_cnc("halcmd", "-f", str(hal_file))
+        assert loaded.returncode == 0, loaded.stderr
+        yield task
+    finally:
+        run_cnc("halcmd", "unload", "all")
+        host.send_signal(signal.SIGTERM)
+        host.wait(timeout=10)
+        task.close()
+
+
+def configure(task: Task) -> None:
+    for joint in range(3):
+        for cmd in (
+            emc.EMC_JOINT_SET_MIN_POSITION_LIMIT(joint=joint, limit=-50.0),
+            emc.EMC_JOINT_SET_MAX_POSITION_LIMIT(joint=joint, limit=50.0),
+            emc.EMC_JOINT_SET_MAX_VELOCITY(joint=joint, vel=30.0),
+            emc.EMC_JOINT_SET_MAX_ACCELERATION(joint=joint, acc=500.0),
+            emc.EMC_AXIS_SET_MAX_VELOCITY(axis=joint, vel=30.0),
+            emc.EMC_AXIS_SET_MAX_ACCELERATION(axis=joint, acc=500.0),
+            emc.EMC_AXIS_SET_MIN_POSITION_LIMIT(axis=joint, limit=-50.0),
+            emc.EMC_AXIS_SET_MAX_POSITION_LIMIT(axis=joint, limit=50.0),
+        ):
+            assert task.send(cmd).status == RCS_STATUS.DONE
+
+
+def pin(name: str) -> float:
+    hal = Hal()
+    try:
+        return hal.pin_value(hal.find_pin(name)[1])
+    finally:
+        hal.close()
+
+
+def settled_pin(name: str, expected: float, timeout: float = 5) -> float:
+    """The pin's value once it reaches ``expected`` (feedback lags a servo period)."""
+    deadline = time.monotonic() + timeout
+    value = pin(name)
+    while value != pytest.approx(expected) and time.monotonic() < deadline:
+        time.sleep(0.005)
+        value = pin(name)
+    return value
+
+
+def test_enable_home_and_move_through_real_processes(machine: Task) -> None:
+    configure(machine)
+    assert machine.send(emc.EMC_TRAJ_ENABLE()).status == RCS_STATUS.DONE
+    assert machine.send(emc.EMC_JOINT_HOME(joint=-1)).status == RCS_STATUS.DONE
+    stat = machine.wait_for(lambda s: all(s.joint[i].homed for i in range(3)) and s.traj.inpos)
+    assert stat.traj.enabled
+    assert machine.send(emc.EMC_TRAJ_SET_MODE(mode=emc.EMC_TRAJ_MODE_ENUM.COORD)).status == (
+        RCS_STATUS.DONE
+    )
+    move = emc.EMC_TRAJ_LINEAR_MOVE(type=emc.EMC_MOTION_TYPE.FEED, vel=20.0, ini_maxvel=30.0)
+    move.acc = 500.0
+    move.end.tran.x, move.end.tran.y, move.end.tran.z = 5.0, -3.0, 1.0
+    assert machine.send(move).status == RCS_STATUS.DONE
+    stat = machine.wait_for(
+        lambda s: s.traj.inpos and s.traj.queue == 0 and s.traj.position.tran.x > 4.9
+    )
+    assert (stat.traj.position.tran.x, stat.traj.position.tran.y) == pytest.approx((5.0, -3.0))
+    assert stat.traj.actualPosition.tran.z == pytest.approx(1.0)
+    assert pin("joint.0.motor-pos-cmd") == pytest.approx(5.0)
+    assert pin("axis.y.pos-cmd") == pytest.approx(-3.0)
+    assert pin("joint.2.amp-enable-out") == 1
+    assert pin("motion.coord-mode") == 1
+
+
+def test_refused_command_answers_error_and_says_why_on_the_error_channel(machine: Task) -> None:
+    configure(machine)
+    machine.errors()
+    move = emc.EMC_TRAJ_LINEAR_MOVE(vel=10.0, ini_maxvel=30.0, acc=500.0)
+    assert machine.send(move).status == RCS_STATUS.ERROR  # not enabled, not in coord mode
+    assert machine.send(emc.EMC_TRAJ_ENABLE()).status == RCS_STATUS.DONE
+    jog = emc.EMC_JOG_INCR(joint_or_axis=7, incr=1.0, vel=5.0, jjogmode=emc.JOG_MODE.JOINT)
+    assert machine.send(jog).status == RCS_STATUS.ERROR
+    deadline = time.monotonic() + 10
+    errors: list[str] = []
+    while len(errors) < 2 and time.monotonic() < deadline:
+        errors += machine.errors()
+        time.sleep(0.01)
+    assert errors == [
+        "moves need coordinated mode",
+        "EMC_JOG_INCR: joint 7 does not exist (0..2)",
+    ]
+
+
+def test_joint_jog_moves_the_motor_pin(machine: Task) -> None:
+    configure(machine)
+    machine.send(emc.EMC_TRAJ_ENABLE())
+    jog = emc.EMC_JOG_INCR(joint_or_axis=1, incr=2.5, vel=10.0, jjogmode=emc.JOG_MODE.JOINT)
+    assert machine.send(jog).status == RCS_STATUS.DONE
+    stat = machine.wait_for(lambda s: s.joint[1].output > 2.49 and s.joint[1].inpos)
+    assert stat.joint[1].output == pytest.approx(2.5)
+    assert pin("joint.1.motor-pos-cmd") == pytest.approx(2.5)
+    assert settled_pin("joint.1.pos-fb", 2.5) == pytest.approx(2.5)
