@@ -200,9 +200,7 @@ class ToolTable:
                 if self.random_toolchanger:
                     idx = entry.pocketno
                     if not 0 <= idx < CANON_POCKETS_MAX:
-                        raise ValueError(
-                            f"pocket {idx} out of range 0..{CANON_POCKETS_MAX - 1}"
-                        )
+                        raise ValueError(f"pocket {idx} out of range 0..{CANON_POCKETS_MAX - 1}")
                     if strict and entry.toolno < 0:
                         raise ValueError(f"tool number {entry.toolno} must be >= 0")
                 else:

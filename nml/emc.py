@@ -1078,7 +1078,7 @@ class EMC_TOOL_SET_OFFSET(EMC_TOOL_CMD_MSG, type_id=1108):
 
 
 class EMC_TOOL_SET_NUMBER(EMC_TOOL_CMD_MSG, type_id=1109):
-    tool: i32  # new number of the tool in the spindle
+    tool: i32  # index in the tool table of the tool now in the spindle (M61; as LinuxCNC 2.9)
 
 
 class EMC_TOOL_START_CHANGE(EMC_TOOL_CMD_MSG, type_id=1110): ...
