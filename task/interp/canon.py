@@ -11,6 +11,7 @@ the interpreter sees exactly what it would see inside ``rs274``.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from typing import Protocol
 
@@ -305,7 +306,7 @@ class PrintingCanon:
     def STRAIGHT_PROBE(self, line, x, y, z, a, b, c, u, v, w, probe_type) -> None:
         pos = self.position
         dx, dy, dz = pos[0] - x, pos[1] - y, pos[2] - z
-        distance = (dx * dx + dy * dy + dz * dz) ** 0.5
+        distance = math.sqrt(dx * dx + dy * dy + dz * dz)
         self.emit(f"STRAIGHT_PROBE({x:.4f}, {y:.4f}, {z:.4f}, {a:.4f}, {b:.4f}, {c:.4f})")
         self.probe_position = [x, y, z, a, b, c]
         if distance != 0:

@@ -220,6 +220,7 @@ def _run(args, out, tool_files, var_file, block_delete, do_next, go, ini_path, t
     # rs274 builds its interpreter before it names the INI file, so the predefined
     # #<_metric_machine> never sees it (-1); the INI counts from init() on.
     interp.ini = ini
+    interp.report = lambda text: _err(out, text)
     try:
         interp.init()
     except InterpError as error:

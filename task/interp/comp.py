@@ -131,10 +131,10 @@ class CompMixin:
         for q in self.qc:
             kind = q[0]
             if kind == QARC:
-                r1 = math.hypot(q[3] - q[5], q[4] - q[6])
+                r1 = ldmath.hypot(q[3] - q[5], q[4] - q[6])
                 l1 = q[2]
                 q[3], q[4] = x, y
-                r2 = math.hypot(x - q[5], y - q[6])
+                r2 = ldmath.hypot(x - q[5], y - q[6])
                 l2 = ldmath.find_turn(self.endpoint[0], self.endpoint[1], q[5], q[6], q[7], x, y)
                 if abs(r1 - r2) > 0.01:
                     raise InterpError(
@@ -200,7 +200,7 @@ class CompMixin:
         radius = self.cutter_comp_radius
         side = self.cutter_comp_side
         cx, cy, _cz = self.comp_get_current()
-        distance = math.hypot(px - cx, py - cy)
+        distance = ldmath.hypot(px - cx, py - cy)
         if side not in (LEFT, RIGHT):
             raise InterpError("Bug side not right or left")
         if distance <= radius:
@@ -252,11 +252,9 @@ class CompMixin:
             end_y = py + radius * math.sin(alpha + gamma)
             mid_x = opx + radius * math.cos(alpha + gamma)
             mid_y = opy + radius * math.sin(alpha + gamma)
-            if beta < -small or ld(beta) > pi + small:
-                concave = True
-            elif ld(beta) > pi - small and self.qc and self.qc[0][0] == QARC and (
-                    (side == RIGHT and self.qc[0][7] > 0)
-                    or (side == LEFT and self.qc[0][7] < 0)):
+            arc_first = bool(self.qc) and self.qc[0][0] == QARC and (
+                (side == RIGHT and self.qc[0][7] > 0) or (side == LEFT and self.qc[0][7] < 0))
+            if beta < -small or ld(beta) > pi + small or (ld(beta) > pi - small and arc_first):
                 concave = True
             else:
                 concave = False
@@ -284,7 +282,7 @@ class CompMixin:
                 else:
                     p_end1, p_end2, p_c1, p_c2, p_turn = front[3], front[4], front[5], \
                         front[6], front[7]
-                    oldrad = math.hypot(p_c2 - p_end2, p_c1 - p_end1)
+                    oldrad = ldmath.hypot(p_c2 - p_end2, p_c1 - p_end1)
                     base_dir = math.atan2(py - opy, px - opx)
                     theta2 = float(ld(base_dir) + pi_2) if p_turn > 0 else \
                         float(ld(base_dir) - pi_2)
@@ -330,7 +328,7 @@ class CompMixin:
         tool_radius = self.cutter_comp_radius
         spiral_abs, radius_tol = self._comp_tolerances()
         cx, cy, cz = self.comp_get_current()
-        if math.hypot(end_x - cx, end_y - cy) <= tool_radius:
+        if ldmath.hypot(end_x - cx, end_y - cy) <= tool_radius:
             raise InterpError(
                 "Radius of cutter compensation entry arc is not greater than the tool radius")
         if block.r_flag:
@@ -353,7 +351,7 @@ class CompMixin:
         self.comp_set_programmed(end_x, end_y, end_z)
         end_x += tool_radius * math.cos(gamma)
         end_y += tool_radius * math.sin(gamma)
-        b_len = math.hypot(cy - end_y, cx - end_x) / 2.0
+        b_len = ldmath.hypot(cy - end_y, cx - end_x) / 2.0
         ab_ang = math.atan2(center_y - end_y, center_x - end_x)
         a_ang = math.atan2(cy - end_y, cx - end_x) - ab_ang
         if abs(math.cos(a_ang)) < TOLERANCE_EQUAL:
@@ -361,8 +359,8 @@ class CompMixin:
         c_len = b_len / math.cos(a_ang)
         center_x = end_x + c_len * math.cos(ab_ang)
         center_y = end_y + c_len * math.sin(ab_ang)
-        if abs(math.hypot(center_x - end_x, center_y - end_y)
-               - math.hypot(center_x - cx, center_y - cy)) > spiral_abs:
+        if abs(ldmath.hypot(center_x - end_x, center_y - end_y)
+               - ldmath.hypot(center_x - cx, center_y - cy)) > spiral_abs:
             raise InterpError("Bug in tool radius comp")
         rest = ends[3:9]
         if self.cutter_comp_orientation not in (0, 9):
@@ -393,7 +391,7 @@ class CompMixin:
                                block)
         side = self.cutter_comp_side
         tool_radius = self.cutter_comp_radius
-        arc_radius = math.hypot(centerx - end_x, centery - end_y)
+        arc_radius = ldmath.hypot(centerx - end_x, centery - end_y)
         ld, pi, pi_2 = ldmath.ld, ldmath.pi_ld(), ldmath.pi_2_ld()
         theta = math.atan2(cy - opy, cx - opx)
         theta = float(ld(theta) - pi_2) if side == LEFT else float(ld(theta) + pi_2)
@@ -424,10 +422,7 @@ class CompMixin:
                     toward_nominal = cy2 + tool_radius
                     ratio = toward_nominal / dist_from_center
                     _check_gouge(ratio)
-                    if turn > 0:
-                        angle = theta + math.asin(ratio)
-                    else:
-                        angle = theta - math.asin(ratio)
+                    angle = theta + math.asin(ratio) if turn > 0 else theta - math.asin(ratio)
                 else:
                     dist_from_center = arc_radius + tool_radius
                     toward_nominal = cy2 - tool_radius
@@ -443,10 +438,10 @@ class CompMixin:
             else:
                 p_end1, p_end2, p_c1, p_c2, p_turn = front[3], front[4], front[5], front[6], \
                     front[7]
-                oldrad = math.hypot(p_c2 - p_end2, p_c1 - p_end1)
+                oldrad = ldmath.hypot(p_c2 - p_end2, p_c1 - p_end1)
                 newrad = arc_radius - tool_radius if _inside(side, turn) else \
                     arc_radius + tool_radius
-                arc_cc = math.hypot(p_c2 - centery, p_c1 - centerx)
+                arc_cc = ldmath.hypot(p_c2 - centery, p_c1 - centerx)
                 if oldrad == 0 or arc_cc == 0:
                     raise InterpError(
                         "Arc to arc motion is invalid because the arcs have the same center")
@@ -491,9 +486,9 @@ class CompMixin:
     def _inverse_time_arc(self, x1, y1, z1, cx, cy, turn, x2, y2, z2, block: Block) -> None:
         if self.feed_mode != 1:
             return
-        radius = math.hypot(cx - x1, cy - y1)
+        radius = ldmath.hypot(cx - x1, cy - y1)
         theta = ldmath.find_turn(x1, y1, cx, cy, turn, x2, y2)
-        length = radius * abs(theta) if z2 == z1 else math.hypot(radius * theta, z2 - z1)
+        length = radius * abs(theta) if z2 == z1 else ldmath.hypot(radius * theta, z2 - z1)
         rate = max(0.1, length * block.f_number)
         self._enq("SET_FEED_RATE", rate)
         self.feed_rate = rate

@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 
 from . import canon as C  # noqa: N812  (C.PLANE_XY reads like CANON_PLANE_XY)
+from . import ldmath
 from .block import G_73, G_74, G_81, G_82, G_83, G_84, G_85, G_86, G_87, G_88, G_89, Block
 from .errors import InterpError
 
@@ -85,7 +86,7 @@ class CyclesMixin:
             r = block.r_number
             cc = cc_word
             if plane == C.PLANE_XY and (block.radius_flag or block.theta_flag):
-                radius = block.radius if block.radius_flag else math.hypot(cur[1], cur[0])
+                radius = block.radius if block.radius_flag else ldmath.hypot(cur[1], cur[0])
                 theta = (block.theta * (math.pi / 180.0) if block.theta_flag
                          else math.atan2(cur[1], cur[0]))
                 aa = radius * math.cos(theta)
@@ -267,14 +268,14 @@ class CyclesMixin:
                     raise InterpError("Incremental motion with polar coordinates is "
                                       "indeterminate when at the origin")
                 theta = math.atan2(bb, aa)
-                radius = math.hypot(bb, aa) + radius_increment
+                radius = ldmath.hypot(bb, aa) + radius_increment
                 aa, bb = radius * math.cos(theta), radius * math.sin(theta)
             if theta_increment:
                 if bb == 0 and aa == 0:
                     raise InterpError("Incremental motion with polar coordinates is "
                                       "indeterminate when at the origin")
                 theta = math.atan2(bb, aa) + theta_increment
-                radius = math.hypot(bb, aa)
+                radius = ldmath.hypot(bb, aa)
                 aa, bb = radius * math.cos(theta), radius * math.sin(theta)
             if repeat == block.l_number and current_cc > r:
                 traverse(aa, bb, current_cc)

@@ -15,6 +15,7 @@ import contextlib
 import math
 import os
 import re
+from collections.abc import Callable
 
 from . import canon as C  # noqa: N812  (C.PLANE_XY reads like CANON_PLANE_XY)
 from . import ldmath
@@ -176,6 +177,8 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin, CompMixin):
         self.ini = ini
         self.parameter_file = parameter_file
         self.task = task
+        # where rs274's stray diagnostics go (a standalone run passes stderr)
+        self.report: Callable[[str], object] = lambda text: None
         self.parameters = [0.0] * 5602
         self.parameter_assignments: list[tuple[int, float]] = []
         self.named_parameter_assignments: list[tuple[str, float]] = []
@@ -1990,7 +1993,7 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin, CompMixin):
         taper_dist = block.e_number if block.e_flag else 0.0
         if taper_dist < 0.0:
             taper_dist = 0.0
-        taper_pitch = (pitch * math.hypot(taper_dist, full_threadheight) / taper_dist
+        taper_pitch = (pitch * ldmath.hypot(taper_dist, full_threadheight) / taper_dist
                        if taper_dist > 0.0 else pitch)
         if end_z > start_z:
             taper_dist = -taper_dist
@@ -2125,7 +2128,10 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin, CompMixin):
             self.motion_mode = -1
 
     def inverse_time_rate_straight(self, ends: list[float], block: Block) -> None:
-        cur = self.current
+        cur = list(self.current)
+        if self.cutter_comp_side and self.cutter_comp_radius > 0.0 and \
+                not self.cutter_comp_firstmove:
+            cur[0], cur[1], cur[2] = self.program_x, self.program_y, self.program_z
         length = _straight_length(ends, cur)
         rate = max(0.1, length * block.f_number)
         self._enq("SET_FEED_RATE", rate)
@@ -2261,8 +2267,8 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin, CompMixin):
             center_x, center_y = i, j
         else:
             center_x, center_y = cx + i, cy + j
-        radius = math.hypot(center_x - cx, center_y - cy)
-        radius2 = math.hypot(center_x - ex, center_y - ey)
+        radius = ldmath.hypot(center_x - cx, center_y - cy)
+        radius2 = ldmath.hypot(center_x - ex, center_y - ey)
         if radius < radius_tol or radius2 < radius_tol:
             raise InterpError(
                 f"Zero-radius arc: start=({a}{cx:.4f},{b}{cy:.4f}) center=({a}{center_x:.4f},"
@@ -2288,7 +2294,7 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin, CompMixin):
         abs_radius = abs(radius)
         mid_x = (ex + cx) / 2.0
         mid_y = (ey + cy) / 2.0
-        half_length = math.hypot(mid_x - ex, mid_y - ey)
+        half_length = ldmath.hypot(mid_x - ex, mid_y - ey)
         if half_length - abs_radius > tolerance:
             raise InterpError("Arc radius too small to reach end point")
         if half_length / abs_radius > 1 - TINY:
@@ -2357,7 +2363,7 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin, CompMixin):
                     t = math.atan2(py, px)
                     px, py = block.radius * math.cos(t), block.radius * math.sin(t)
                 else:
-                    radius = math.hypot(py, px)
+                    radius = ldmath.hypot(py, px)
                     t = block.theta * (math.pi / 180.0)
                     px, py = radius * math.cos(t), radius * math.sin(t)
             pz = block.z_number if block.z_flag else (
@@ -2392,7 +2398,7 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin, CompMixin):
                     "Incremental motion with polar coordinates is indeterminate when at the "
                     "origin")
             t = math.atan2(py, px)
-            radius = math.hypot(py, px) + block.radius
+            radius = ldmath.hypot(py, px) + block.radius
             px, py = radius * math.cos(t), radius * math.sin(t)
         if block.theta_flag:
             if block.x_flag or block.y_flag:
@@ -2401,7 +2407,7 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin, CompMixin):
                 raise InterpError(
                     "G91 motion with polar coordinates is indeterminate when at the origin")
             t = math.atan2(py, px) + block.theta * (math.pi / 180.0)
-            radius = math.hypot(py, px)
+            radius = ldmath.hypot(py, px)
             px, py = radius * math.cos(t), radius * math.sin(t)
         pz = self.program_z if cm and plane == C.PLANE_XZ else cur[2]
         if block.z_flag:
@@ -2901,11 +2907,11 @@ def _find_turn(x1, y1, center_x, center_y, turn, x2, y2) -> float:
 
 
 def _arc_length(x1, y1, z1, cx, cy, turn, x2, y2, z2) -> float:
-    radius = math.hypot(cx - x1, cy - y1)
+    radius = ldmath.hypot(cx - x1, cy - y1)
     theta = _find_turn(x1, y1, cx, cy, turn, x2, y2)
     if z2 == z1:
         return radius * abs(theta)
-    return math.hypot(radius * theta, z2 - z1)
+    return ldmath.hypot(radius * theta, z2 - z1)
 
 
 def _c_format(fmt: str, value: float) -> str:

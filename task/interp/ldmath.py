@@ -98,3 +98,24 @@ def find_turn(x1: float, y1: float, center_x: float, center_y: float, turn: int,
 def degrees_to_radians(degrees: float) -> float:
     """``(double)(degrees * (M_PIl / 180.0))``"""
     return float(ld(degrees) * (pi_ld() / ld(180.0)))
+
+
+def _libc_hypot():
+    """glibc's hypot: CPython's math.hypot uses its own algorithm, which can differ from
+    glibc in the last bit, and LinuxCNC's positions are built from glibc's."""
+    import ctypes
+    import ctypes.util
+
+    try:
+        libm = ctypes.CDLL(ctypes.util.find_library("m") or "libm.so.6")
+        func = libm.hypot
+    except (OSError, AttributeError):
+        import math
+
+        return math.hypot
+    func.restype = ctypes.c_double
+    func.argtypes = [ctypes.c_double, ctypes.c_double]
+    return func
+
+
+hypot = _libc_hypot()

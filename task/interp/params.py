@@ -11,7 +11,6 @@ predefined ``#<_...>`` ones are read-only and computed from the interpreter stat
 
 from __future__ import annotations
 
-import contextlib
 import math
 import os
 
@@ -136,8 +135,14 @@ class ParamsMixin:
         for i in range(k, MAX_PARAMETERS):
             if i in _REQUIRED_SET:
                 out.append(f"{i}\t{pars[i]:f}\n")
-        with contextlib.suppress(OSError):  # rs274 says nothing when it cannot write it
+        existed = os.path.exists(filename)
+        try:
             atomic_write_text(filename, "".join(out), keep_backup=True)
+        except OSError:
+            return  # rs274 says nothing when it cannot write the file
+        if not existed:
+            # LinuxCNC links the old file to .bak before the rename and reports the failure
+            self.report("link (updating variable file): No such file or directory\n")
 
     # -------------------------------------------------------- named params
     def init_named_parameters(self) -> None:
