@@ -50,6 +50,9 @@ def _write_bytes(stream, text: str) -> None:
         stream.write(text)
 
 
+_stdin_drained = False
+
+
 class _Out:
     """Buffered writer for the canon; flushed before anything goes to stderr."""
 
@@ -76,10 +79,18 @@ def _report(out: _Out, interp: Interpreter, error: InterpError) -> None:
 
 
 def _read_line(prompt: str) -> str | None:
-    try:
-        return input(prompt)
-    except EOFError:
+    """readline(): the prompt only shows on a terminal, as with rs274."""
+    if _stdin_drained:
         return None
+    if sys.stdin.isatty():
+        try:
+            return input(prompt)
+        except EOFError:
+            return None
+    line = sys.stdin.readline()
+    if not line:
+        return None
+    return line.rstrip("\n")
 
 
 def interpret_from_keyboard(interp: Interpreter, out: _Out, block_delete: bool) -> int:
@@ -201,8 +212,8 @@ def _run(args, out, tool_files, var_file, block_delete, do_next, go, ini_path, t
     loaded = False
     for name in tool_files:
         loaded = bool(_load_tools(tools, name, out))
-    if not go and not _menu(out):
-        return 0
+    if not go:
+        block_delete = _menu(out, block_delete, tool_files, tools)
     _err(out, "executing\n")
     if not tool_files and not _load_tools(tools, DEFAULT_TOOL_TABLE, out):
         return 1
@@ -250,21 +261,39 @@ def _load_tools(tools: ToolTable, name: str, out: _Out) -> bool:
     return True
 
 
-def _menu(out: _Out) -> bool:
-    """rs274's start-up menu (without -g); only 'start interpreting' is offered here."""
+def _menu(out: _Out, block_delete: bool, tool_files: list[str], tools: ToolTable) -> bool:
+    """rs274's start-up menu (without -g): start, read a tool file, toggle block delete.
+
+    Returns the block delete switch. Choosing a parameter file and the error-handling
+    submenu are offered by rs274 too but not here (use -v and -n).
+    """
     while True:
         _err(out, "enter a number:\n1 = start interpreting\n2 = choose parameter file ...\n"
-                  "3 = read tool file ...\n4 = turn block delete switch ON\n"
+                  "3 = read tool file ...\n"
+                  f"4 = turn block delete switch {'OFF' if block_delete else 'ON'}\n"
                   "5 = adjust error handling...\nenter choice => ")
         line = sys.stdin.readline()
+        if not sys.stdin.isatty():
+            # rs274's menu reads with stdio, which buffers the whole pipe: readline() then
+            # finds nothing left for the interactive mode
+            global _stdin_drained
+            _stdin_drained = True
         if not line:
-            return True
+            return block_delete
         try:
             choice = int(line.split()[0])
         except (ValueError, IndexError):
             continue
         if choice == 1:
-            return True
+            return block_delete
+        if choice == 3:
+            _err(out, "name of tool file => ")
+            name = sys.stdin.readline().rstrip("\n")
+            if not _load_tools(tools, name, out):
+                raise SystemExit(1)
+            tool_files.append(name)
+        elif choice == 4:
+            block_delete = not block_delete
 
 
 if __name__ == "__main__":
