@@ -62,13 +62,14 @@ def run_program(program: Path, folder: Path, args: list[str]) -> Result:
     """Copy ``folder`` (inputs only) to a scratch folder and run there, as make_expected.sh."""
     with tempfile.TemporaryDirectory() as scratch:
         work = Path(scratch) / "w"
-        shutil.copytree(folder, work, ignore=shutil.ignore_patterns(
-            "*.out", "*.err", "*.rc", "*.var.bak", "__pycache__"))
-        for stale in work.glob("*.var"):
-            if stale.name != "params.var":
-                stale.unlink()
-        if (folder / "params.var").exists():
-            shutil.copy(folder / "params.var", work / "params.var")
+        work.mkdir()
+        # the inputs a run can see: the program, the tables and the folders of support files
+        for name in (program.name, "tool.tbl", "params.var"):
+            if (folder / name).exists():
+                shutil.copy(folder / name, work / name)
+        for sub in folder.iterdir():
+            if sub.is_dir() and sub.name != "__pycache__":
+                shutil.copytree(sub, work / sub.name)
         out, err, rc = run_rs274_inprocess(args, work)
         var_path = work / "params.var"
         var = var_path.read_text() if var_path.exists() else None
