@@ -470,7 +470,12 @@ class ShmBuffer:
             raise NmlAccessError(f"buffer {self.name}: an observer cannot wait for messages")
         sem = self._wake_sem(self._slot)
         while True:
-            self._lock()
+            # The lock is part of this wait: it gets the caller's time, not the P line's.
+            remaining = math.inf if deadline is None else max(0.0, deadline - time.monotonic())
+            try:
+                self._lock(timeout=remaining)
+            except NmlTimeoutError:
+                return False
             try:
                 if is_ready():
                     return True
@@ -582,11 +587,14 @@ class ShmBuffer:
     def read(self) -> NMLmsg | None:
         """A new message, or None: the oldest queued one (removed), or the status if it
         changed since this connection last read it."""
+        return self._read(lock_timeout=None)
+
+    def _read(self, lock_timeout: float | None) -> NMLmsg | None:
         self._require_readable()
         if self.is_queue:
             if self._slot < 0:
                 raise NmlAccessError(f"buffer {self.name}: an observer cannot consume messages")
-            return self._queue_take(is_consuming=True)
+            return self._queue_take(is_consuming=True, lock_timeout=lock_timeout)
         data, count = self._latest_bytes()
         if data is None or count == self._last_seen:
             return None
@@ -602,15 +610,17 @@ class ShmBuffer:
         return None if data is None else decode(data, f"buffer {self.name}")
 
     def blocking_read(self, timeout: float) -> NMLmsg | None:
-        """Wait for a new message up to ``timeout`` s (< 0: forever, 0: don't wait)."""
-        msg = self.read()
-        if msg is not None or timeout == 0:
-            return msg
+        """Wait for a new message up to ``timeout`` s (< 0: forever, 0: don't wait). The whole
+        wait, taking the lock included, follows this timeout rather than the P line's."""
         deadline = None if timeout < 0 or math.isinf(timeout) else time.monotonic() + timeout
         while True:
             if not self._wait_for_change(self._has_new_data, deadline):
                 return None
-            msg = self.read()
+            remaining = math.inf if deadline is None else max(0.0, deadline - time.monotonic())
+            try:
+                msg = self._read(lock_timeout=remaining)
+            except NmlTimeoutError:
+                return None
             if msg is not None:
                 return msg
 
@@ -651,10 +661,10 @@ class ShmBuffer:
                 if spins % 1000 == 0 and self._repair_after_dead_holder():
                     continue
 
-    def _queue_take(self, is_consuming: bool) -> NMLmsg | None:
+    def _queue_take(self, is_consuming: bool, lock_timeout: float | None = None) -> NMLmsg | None:
         """The next message for this connection: the oldest one, or in a broadcast queue the
         oldest this reader has not read yet. Consuming removes it (or moves the cursor)."""
-        self._lock()
+        self._lock(lock_timeout)
         try:
             cursor = self._slot_get(self._slot, "cursor") if self.is_broadcast else -1
             try:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+import threading
 import time
 from collections.abc import Iterator
 
@@ -167,6 +169,24 @@ def test_master_removes_everything_at_close(cfg: NmlConfig, cnc_instance: str) -
     reader.close()
     master.close()
     assert instance_objects(cnc_instance) == []
+
+
+def test_blocking_read_waits_for_a_busy_lock_even_with_a_zero_p_line_timeout(opened) -> None:
+    master = opened("m", "q")
+    impatient = opened("w", "q")  # timeout 0: a plain write fails at once when busy
+    reader = ShmBuffer(master.config, dataclasses.replace(impatient.process, ops="RW"))
+    try:
+        master._lock()
+        releaser = threading.Timer(0.2, master._unlock)
+        releaser.start()
+        with pytest.raises(NmlTimeoutError):
+            impatient.write(TEST_CMD())
+        assert reader.blocking_read(0.1) is None  # still busy: a timeout, not an error
+        releaser.join()
+        master.write(TEST_CMD(index=5))
+        assert reader.blocking_read(5).index == 5
+    finally:
+        reader.close()
 
 
 def test_blocking_read_times_out_with_none(opened) -> None:
