@@ -1,0 +1,45 @@
+"""``cnc.ini(path)``: LinuxCNC's ``linuxcnc.ini``, over ``cnc.ini.IniFile``.
+
+``cnc.ini`` is also the module that defines ``IniFile``; ``make_callable`` lets calling that
+module open a file the LinuxCNC way, so both ``cnc.ini("mill.ini").find("EMC", "MACHINE")``
+and ``from cnc.ini import IniFile`` work.
+"""
+
+from __future__ import annotations
+
+import os
+import types
+
+from cnc.api import error
+from cnc.ini import IniError, IniFile
+
+
+class ini:  # LinuxCNC's name: linuxcnc.ini
+    """An INI file, read once; ``cnc.error`` if it cannot be read or parsed."""
+
+    def __init__(self, path: str | os.PathLike[str]) -> None:
+        try:
+            self._file = IniFile.load(path)
+        except IniError as exc:
+            raise error(f"inifile.open({os.fspath(path)}) failed: {exc}") from None
+
+    def find(self, section: str, key: str, num: int = 1) -> str | None:
+        """The ``num``-th (from 1) value of ``[section]key``, or None."""
+        values = self._file.findall(section, key)
+        return values[num - 1] if 1 <= num <= len(values) else None
+
+    def findall(self, section: str, key: str) -> list[str]:
+        """Every value of ``[section]key`` in file order (empty list if none)."""
+        return self._file.findall(section, key)
+
+
+class _CallableIniModule(types.ModuleType):
+    """The module ``cnc.ini``, which ``cnc.ini(path)`` also calls to open a file."""
+
+    def __call__(self, path: str | os.PathLike[str]) -> ini:
+        return ini(path)
+
+
+def make_callable(module: types.ModuleType) -> None:
+    """Make ``module`` (``cnc.ini``) callable as LinuxCNC's ``linuxcnc.ini`` class."""
+    module.__class__ = _CallableIniModule
