@@ -1,7 +1,8 @@
 """``loadrt motmod``: the motion controller as a realtime HAL module (MOT-008..018, ARCH-007).
 
     loadrt trivkins coordinates=XYZ
-    loadrt motmod servo_period_nsec=1000000 num_joints=3 [num_spindles=1 num_dio=4 num_aio=4]
+    loadrt motmod servo_period_nsec=1000000 num_joints=3 [base_period_nsec=N num_spindles=1
+                  num_dio=4 num_aio=4]     # creates servo-thread (and base-thread), as LinuxCNC
     addf motion-command-handler servo-thread
     addf motion-controller servo-thread
 
@@ -137,6 +138,10 @@ class Motmod:
         )
         host.add_function(comp, "motion-command-handler", self.command_handler)
         host.add_function(comp, "motion-controller", self.controller_period)
+        # As LinuxCNC's motmod: the threads the HAL files addf to (base first, fastest).
+        if options["base_period_nsec"]:
+            host.new_thread("base-thread", options["base_period_nsec"], creator=comp)
+        host.new_thread("servo-thread", options["servo_period_nsec"], creator=comp)
 
     # ------------------------------------------------------------------ functions
     def command_handler(self, period: int) -> None:
@@ -236,6 +241,7 @@ def rtapi_app_main(host: Any, comp: str, args: dict[str, str]) -> None:
 
 
 _INT_OPTIONS = {
+    "base_period_nsec": 0,
     "servo_period_nsec": 1_000_000,
     "traj_period_nsec": 0,
     "num_joints": 3,
@@ -254,7 +260,7 @@ _LIMITS = {
 
 
 def _options(args: dict[str, str]) -> dict[str, int]:
-    unknown = set(args) - set(_INT_OPTIONS) - {"base_period_nsec", "kins"}
+    unknown = set(args) - set(_INT_OPTIONS)
     if unknown:
         raise HalError(f"motmod: unknown argument '{sorted(unknown)[0]}'")
     options = dict(_INT_OPTIONS)

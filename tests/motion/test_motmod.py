@@ -16,7 +16,6 @@ from nml.message import RCS_STATUS
 from tests.hal.halrun_util import run_cnc
 
 MOTION_HAL = """\
-loadrt threads name1=servo-thread period1=1000000
 loadrt trivkins coordinates=XYZ
 loadrt motmod servo_period_nsec=1000000 num_joints=3 num_dio=2 num_aio=1
 addf motion-command-handler servo-thread
