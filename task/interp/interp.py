@@ -201,7 +201,8 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin, CompMixin):
         self.nurbs_order = 3
         self.endpoint = [0.0, 0.0]
         self.endpoint_valid = False
-        self._fast = None  # a line taken by the fast path: (motion, words, n)
+        self._fast = None  # a line taken by the fast path: (motion, ends)
+        self._no_fast = False
         self._file_cache: dict[str, list[str]] = {}
 
     def _get_linetext(self) -> str:
@@ -596,7 +597,7 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin, CompMixin):
         if status == INTERP_OK:
             if self.line_length != 0:
                 match = _FAST_LINE.match(self.blocktext)
-                if match is not None and self._fast_read(match):
+                if match is not None and not self._no_fast and self._fast_read(match):
                     return INTERP_OK
                 block = Block()
                 block.offset = offset
@@ -1875,6 +1876,8 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin, CompMixin):
             self.motion_mode = G_80
         elif is_a_cycle(motion):
             self.convert_cycle(motion, block)
+        elif motion in (G_70, G_71, G_71_1, G_71_2, G_72, G_72_1, G_72_2):
+            self.convert_g7x(block)
         elif motion in (G_5, G_5_1):
             self.convert_spline(motion, block)
         elif motion == G_5_2:
@@ -2052,6 +2055,148 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin, CompMixin):
         canon.STOP_SPEED_FEED_SYNCH()
         canon.STRAIGHT_TRAVERSE(line, x_at(depth - end_depth), start_y, target_z - zoff, *rest)
         canon.ENABLE_FEED_OVERRIDE()
+
+    # ========================================================== lathe cycles
+    def convert_g7x(self, block: Block) -> None:
+        """G70/G71/G72: read the profile from sub O<Q>, then cut it (see g7x.py)."""
+        if not block.q_flag:
+            raise InterpError("G7x.x  requires a Q word")
+        cycle = block.g_modes[GM_MOTION]
+        subcycle = cycle % 10
+        cycle //= 10
+        if self.cutter_comp_side and cycle != 70:
+            raise InterpError(
+                f"G{cycle}.{subcycle} cannot be used with cutter compensation enabled")
+        if self.plane != C.PLANE_XZ:
+            raise InterpError(f"G{cycle}.{subcycle} can only be used in XZ plane (G18)")
+        saved_distance, saved_ijk = self.distance_mode, self.ijk_distance_mode
+        self.distance_mode = self.ijk_distance_mode = MODE_ABSOLUTE
+        saved_readers = {k: self._readers.get(k) for k in "acuw"}
+        full = self._make_readers(0x1FF)
+        for k in "acuw":
+            self._readers[k] = full[k]
+        self._no_fast = True
+        try:
+            self._convert_g7x(block, cycle, subcycle, saved_distance, saved_ijk)
+        finally:
+            self._no_fast = False
+            self.distance_mode, self.ijk_distance_mode = saved_distance, saved_ijk
+            for k, reader in saved_readers.items():
+                if reader is None:
+                    self._readers.pop(k, None)
+                else:
+                    self._readers[k] = reader
+
+    def _convert_g7x(self, block, cycle, subcycle, distance_mode, ijk_mode) -> None:
+        from .g7x import Chamfer, Fillet, G7xError, G7xPath, Round, Straight, raise_g7x
+
+        incremental = distance_mode == MODE_INCREMENTAL
+        x, z = self.current[0], self.current[2]
+        if incremental:
+            x += block.x_number if block.x_flag else 0.0
+            z += block.z_number if block.z_flag else 0.0
+        else:
+            x = block.x_number if block.x_flag else x
+            z = block.z_number if block.z_flag else z
+        words = {k: (getattr(block, k + "_flag"), getattr(block, k + "_number"))
+                 for k in ("e", "i", "r", "u", "w")}
+        words["d"] = (block.d_flag, block.d_number_float)
+        words["p"] = (block.p_flag, block.p_number)
+        self.convert_straight(G_0, block)
+        path = G7xPath(lambda text: self.canon.PRINT_LINE(text.rstrip("\n")))
+        start = complex(z, x)
+        exit_level = self.call_level
+        self.read(f"O{block.q_number:f} CALL")
+        while True:
+            blk = self.block
+            if blk.o_name is not None:
+                self.convert_control_functions(blk)
+            if self.call_level == exit_level:
+                break
+            for index, value in self.parameter_assignments:
+                self.parameters[index] = value
+            for name, value in self.named_parameter_assignments:
+                self.store_named_param(name, value)
+            self.named_parameter_assignments = []
+            end = 0j if incremental else start
+            center = 0j
+            if blk.u_flag:
+                if incremental:
+                    raise InterpError("G7x error: Cannot use U in incremental mode (G91)")
+                if blk.x_flag:
+                    raise InterpError("G7x error: Cannot use U and X in the same block")
+                u = blk.u_number / 2 if self.lathe_diameter_mode else blk.u_number
+                end = complex(end.real, end.imag + u)
+            elif blk.x_flag:
+                end = complex(end.real, blk.x_number)
+            if blk.w_flag:
+                if incremental:
+                    raise InterpError("G7x error: Cannot use W in incremental mode (G91)")
+                if blk.z_flag:
+                    raise InterpError("G7x error: Cannot use W and Z in the same block")
+                end = complex(end.real + blk.w_number, end.imag)
+            elif blk.z_flag:
+                end = complex(blk.z_number, end.imag)
+            if blk.i_flag:
+                center = complex(center.real, blk.i_number)
+            if blk.k_flag:
+                center = complex(blk.k_number, center.imag)
+            if incremental:
+                end += start
+            if blk.g_modes[GM_MOTION] != -1:
+                self.motion_mode = blk.g_modes[GM_MOTION]
+            if start != end:
+                mode = self.motion_mode
+                if mode in (G_0, G_1):
+                    path.segments.append(Straight(start, end))
+                elif mode in (G_2, G_3):
+                    if blk.r_flag:
+                        if blk.i_flag or blk.k_flag:
+                            raise InterpError("G7X error: both R and I or K flag used for arc")
+                        r = blk.r_number
+                        center = complex((start + end).real / 2.0, (start + end).imag / 2.0)
+                        chord = _norm_c(end - start)
+                        root = math.sqrt((r * r - chord / 4) / chord)
+                        d = complex(0.0 * root, root) * (end - start)
+                        center = center + d if mode == G_3 else center - d
+                    else:
+                        if not blk.i_flag and not blk.k_flag:
+                            raise InterpError(
+                                "G7X error: either I or K must be present for arc")
+                        if ijk_mode == MODE_INCREMENTAL:
+                            center += start
+                    path.segments.append(Round(int(mode == G_3), start, center, end))
+                if mode in (G_0, G_1, G_2, G_3):
+                    if blk.a_flag and blk.c_flag:
+                        raise InterpError("G7X error: Both A and C parameters on a corner")
+                    if blk.a_flag:
+                        path.segments.append(Fillet(blk.a_number, end))
+                    if blk.c_flag:
+                        path.segments.append(Chamfer(blk.c_number, end))
+                self.current[0], self.current[2] = end.imag, end.real
+                start = end
+            self.read()
+        if len(path.segments) <= 1:
+            return
+        d = words["d"][1] if words["d"][0] else 0.0
+        e = words["e"][1] if words["e"][0] else 0.0
+        i = words["i"][1] if words["i"][0] else 1.0
+        p = words["p"][1] if words["p"][0] else 1.0
+        r = words["r"][1] if words["r"][0] else 0.5
+        u = words["u"][1] if words["u"][0] else 0.0
+        w = words["w"][1] if words["w"][0] else 0.0
+        if i <= 0:
+            raise InterpError("G7X error: I must be greater than zero.")
+        motion = _G7xMachine(self, self.block)
+        try:
+            if cycle == 70:
+                path.do_g70(motion, x, z, d, e, p)
+            elif cycle == 71:
+                path.do_g71(motion, subcycle, x, z, u, w, d, i, r)
+            else:
+                path.do_g72(motion, subcycle, x, z, u, w, d, i, r)
+        except G7xError as error:
+            raise_g7x(error)
 
     # =============================================================== splines
     def convert_spline(self, mode: int, block: Block) -> None:
@@ -2798,6 +2943,40 @@ _FAST_LINE = re.compile(
 
 
 _EMPTY_BLOCK = Block()  # stands for blank lines; never executed
+
+
+def _norm_c(z: complex) -> float:
+    return z.real * z.real + z.imag * z.imag
+
+
+class _G7xMachine:
+    """Turns the lathe cycles' moves into ordinary G0/G1/G2/G3 conversions."""
+
+    def __init__(self, interp: Interpreter, block: Block) -> None:
+        self.interp = interp
+        self.block = block
+
+    def _to(self, end: complex) -> None:
+        block = self.block
+        block.x_flag = block.z_flag = True
+        block.x_number, block.z_number = end.imag, end.real
+
+    def straight_move(self, end: complex) -> None:
+        self._to(end)
+        self.interp.convert_straight(G_1, self.block)
+
+    def straight_rapid(self, end: complex) -> None:
+        self._to(end)
+        self.interp.convert_straight(G_0, self.block)
+
+    def circular_move(self, ccw: int, center: complex, end: complex) -> None:
+        self._to(end)
+        block = self.block
+        block.i_flag = block.k_flag = True
+        block.i_number, block.k_number = center.imag, center.real
+        cur = self.interp.current
+        if abs(cur[2] - block.z_number) >= 0.0001 or abs(cur[0] - block.x_number) >= 0.0001:
+            self.interp.convert_arc(G_3 if ccw else G_2, block)
 
 
 class _ToolTableView:
