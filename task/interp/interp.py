@@ -582,6 +582,29 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin, CompMixin):
             raise
 
     def _read(self, command: str | None) -> int:
+        lines = self.file_lines
+        if command is None and lines is not None and self.file_pos < len(lines) and not (
+                self.probe_flag or self.toolchange_flag or self.input_flag):
+            # the common case first: a plain motion line from the file (see _fast_read)
+            raw = lines[self.file_pos]
+            if len(raw) < LINELEN - 1 and "(" not in raw and ";" not in raw \
+                    and "\x00" not in raw:
+                text = raw.rstrip(" \t\n\r\f\v")
+                line = text.translate(_DOWNCASE)
+                match = _FAST_LINE.match(line)
+                if match is not None and not self._no_fast and self._fast_read(match):
+                    canon = self.canon
+                    pars = self.parameters
+                    pars[5600] = canon.GET_EXTERNAL_TC_FAULT()
+                    pars[5601] = canon.GET_EXTERNAL_TC_REASON()
+                    pars[5420:5429] = self.current
+                    self.file_pos += 1
+                    self.sequence_number += 1
+                    self.linetext = text
+                    self.blocktext = line
+                    self.line_length = len(line)
+                    self.parameter_assignments = []
+                    return INTERP_OK
         self.read_inputs()
         if command is None and self.file_lines is None:
             return INTERP_FILE_NOT_OPEN
@@ -677,14 +700,21 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin, CompMixin):
                 or self.c_indexer_jnum != -1):
             return False
         ends = list(self.current)
+        x, y, z = words[0], words[1], words[2]
         if self.distance_mode == MODE_ABSOLUTE:
-            for k, text in enumerate(words):
-                if text is not None:
-                    ends[k] = float(text)
+            if x is not None:
+                ends[0] = float(x)
+            if y is not None:
+                ends[1] = float(y)
+            if z is not None:
+                ends[2] = float(z)
+            for k in (3, 4, 5):
+                if words[k] is not None:
+                    ends[k] = float(words[k])
         else:
-            for k, text in enumerate(words):
-                if text is not None:
-                    ends[k] += float(text)
+            for k, word in enumerate(words):
+                if word is not None:
+                    ends[k] += float(word)
         self._fast = (move, ends)
         return True
 
