@@ -78,102 +78,36 @@ def is_a_cycle(motion: int) -> bool:
 
 
 class Block:
-    """One parsed line; word flags default to False and numbers to LinuxCNC's sentinels."""
+    """One parsed line; word flags default to False and numbers to LinuxCNC's sentinels.
 
-    __slots__ = (
-        "a_flag",
-        "a_number",
-        "b_flag",
-        "b_number",
-        "c_flag",
-        "c_number",
-        "call_type",
-        "comment",
-        "d_flag",
-        "d_number_float",
-        "dollar_flag",
-        "dollar_number",
-        "e_flag",
-        "e_number",
-        "f_flag",
-        "f_number",
-        "g_modes",
-        "h_flag",
-        "h_number",
-        "i_flag",
-        "i_number",
-        "j_flag",
-        "j_number",
-        "k_flag",
-        "k_number",
-        "l_flag",
-        "l_number",
-        "line_number",
-        "m_count",
-        "m_modes",
-        "motion_to_be",
-        "n_number",
-        "o_name",
-        "o_type",
-        "offset",
-        "p_flag",
-        "p_number",
-        "param_cnt",
-        "params",
-        "q_flag",
-        "q_number",
-        "r_flag",
-        "r_number",
-        "radius",
-        "radius_flag",
-        "s_flag",
-        "s_number",
-        "t_flag",
-        "t_number",
-        "theta",
-        "theta_flag",
-        "u_flag",
-        "u_number",
-        "user_m",
-        "v_flag",
-        "v_number",
-        "w_flag",
-        "w_number",
-        "x_flag",
-        "x_number",
-        "y_flag",
-        "y_number",
-        "z_flag",
-        "z_number",
-    )
+    The defaults are class attributes, so making a block costs two lists; a reader sets
+    only the words the line has.
+    """
+
+    a_flag = b_flag = c_flag = d_flag = dollar_flag = e_flag = f_flag = h_flag = False
+    i_flag = j_flag = k_flag = l_flag = p_flag = q_flag = r_flag = s_flag = t_flag = False
+    u_flag = v_flag = w_flag = x_flag = y_flag = z_flag = radius_flag = theta_flag = False
+    a_number = b_number = c_number = d_number_float = dollar_number = e_number = 0.0
+    f_number = i_number = j_number = k_number = r_number = s_number = 0.0
+    u_number = v_number = w_number = x_number = y_number = z_number = radius = theta = 0.0
+    t_number = 0
+    comment = ""
+    h_number = -1
+    l_number = -1
+    line_number = -1
+    n_number = -1
+    motion_to_be = -1
+    m_count = 0
+    user_m = 0
+    p_number = -1.0
+    q_number = -1.0
+    offset = 0
+    o_type = O_none
+    o_name: str | None = None
+    call_type = -1
+    params: list[float] | None = None
+    param_cnt = 0
 
     def __init__(self) -> None:
-        self.a_flag = self.b_flag = self.c_flag = self.d_flag = self.dollar_flag = False
-        self.e_flag = self.f_flag = self.h_flag = self.i_flag = self.j_flag = False
-        self.k_flag = self.l_flag = self.p_flag = self.q_flag = self.r_flag = False
-        self.s_flag = self.t_flag = self.u_flag = self.v_flag = self.w_flag = False
-        self.x_flag = self.y_flag = self.z_flag = self.radius_flag = self.theta_flag = False
-        self.a_number = self.b_number = self.c_number = self.d_number_float = 0.0
-        self.dollar_number = self.e_number = self.f_number = self.i_number = 0.0
-        self.j_number = self.k_number = self.r_number = self.s_number = 0.0
-        self.u_number = self.v_number = self.w_number = 0.0
-        self.x_number = self.y_number = self.z_number = self.radius = self.theta = 0.0
-        self.t_number = 0
-        self.comment = ""
         self.g_modes = [-1] * 17
         self.m_modes = [-1] * 11
-        self.h_number = -1
-        self.l_number = -1
-        self.line_number = -1
-        self.n_number = -1
-        self.motion_to_be = -1
-        self.m_count = 0
-        self.user_m = 0
-        self.p_number = -1.0
-        self.q_number = -1.0
-        self.offset = 0
-        self.o_type = O_none
-        self.o_name = None
-        self.call_type = -1
-        self.params = None
-        self.param_cnt = 0

@@ -122,6 +122,7 @@ from .block import (
     is_a_cycle,
 )
 from .comp import QOTHER, CompMixin
+from .compiled import Compiler
 from .cycles import CyclesMixin
 from .errors import (
     INTERP_ENDFILE,
@@ -204,6 +205,8 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin, CompMixin):
         self._fast = None  # a line taken by the fast path: (motion, ends)
         self._no_fast = False
         self._file_cache: dict[str, list[str]] = {}
+        self._compiled: dict = {}  # (line, position) -> compiled value (see compiled.py)
+        self._compiler = Compiler(self)
 
     def _get_linetext(self) -> str:
         return self.linetext
@@ -587,8 +590,8 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, CyclesMixin, CompMixin):
                 self.probe_flag or self.toolchange_flag or self.input_flag):
             # the common case first: a plain motion line from the file (see _fast_read)
             raw = lines[self.file_pos]
-            if len(raw) < LINELEN - 1 and "(" not in raw and ";" not in raw \
-                    and "\x00" not in raw:
+            if raw[:1] in _FAST_FIRST and len(raw) < LINELEN - 1 and "(" not in raw \
+                    and ";" not in raw and "\x00" not in raw:
                 text = raw.rstrip(" \t\n\r\f\v")
                 line = text.translate(_DOWNCASE)
                 match = _FAST_LINE.match(line)
@@ -2973,6 +2976,7 @@ _FAST_LINE = re.compile(
 
 
 _EMPTY_BLOCK = Block()  # stands for blank lines; never executed
+_FAST_FIRST = frozenset("nNgGxXyYzZaAbBcC")
 
 
 def _norm_c(z: complex) -> float:

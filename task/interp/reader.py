@@ -467,7 +467,7 @@ class ReaderMixin:
             if self.skipping_o and self.skipping_o != block.o_name:
                 return counter
             if otype != M_99 and counter < length and line[counter] == "[":
-                value, counter = self.read_real_expression(line, counter)
+                value, counter = self.read_expression_cached(line, counter)
                 self.return_value = value
                 self.value_returned = 1
             else:
@@ -487,7 +487,7 @@ class ReaderMixin:
                     continue
                 if len(params) >= INTERP_SUB_PARAMS:
                     raise InterpError("Too many subroutine parameters")
-                value, counter = self.read_real_expression(line, counter)
+                value, counter = self.read_expression_cached(line, counter)
                 params.append(value)
             block.param_cnt = len(params)
             block.params = params + [0.0] * (INTERP_SUB_PARAMS - len(params))
@@ -499,7 +499,7 @@ class ReaderMixin:
                 return counter
             if counter >= length or line[counter] != "[":
                 raise InterpError(f"Left bracket missing after '{_O_NAMES[otype]}'")
-            value, counter = self.read_real_expression(line, counter)
+            value, counter = self.read_expression_cached(line, counter)
             self.test_value = value
         elif otype in (O_do, O_else, O_endif, O_break, O_continue, O_endwhile, O_endrepeat):
             pass
@@ -573,6 +573,18 @@ class ReaderMixin:
         match = _PLAIN_NUMBER.match(line, counter)
         if match is not None:
             return float(match.group()), match.end()
+        # a value read a second time at the same place is compiled (see compiled.py)
+        key = (line, counter)
+        entry = self._compiled.get(key)
+        if entry is None:
+            self._compiled[key] = _SEEN
+        elif entry is _SEEN:
+            entry = self._compiler.value(line, counter)
+            self._compiled[key] = entry if entry is not None else _NEVER
+            if entry is not None:
+                return entry[0](), entry[1]
+        elif entry is not _NEVER:
+            return entry[0](), entry[1]
         if counter >= len(line):
             raise InterpError("No characters found in reading real value")
         c = line[counter]
@@ -606,6 +618,21 @@ class ReaderMixin:
         if valid.end() != len(text):
             raise InterpError(f"bad number format (trailing characters) parsing '{text}'")
         return float(text), span.end()
+
+    def read_expression_cached(self, line: str, counter: int) -> tuple[float, int]:
+        """read_real_expression, compiled the second time it is read (O-word lines)."""
+        key = (line, -counter - 1)  # apart from read_real_value's keys: no NaN check
+        entry = self._compiled.get(key)
+        if entry is None:
+            self._compiled[key] = _SEEN
+        elif entry is _SEEN:
+            entry = self._compiler.expression(line, counter)
+            self._compiled[key] = entry if entry is not None else _NEVER
+            if entry is not None:
+                return entry[0](), entry[1]
+        elif entry is not _NEVER:
+            return entry[0](), entry[1]
+        return self.read_real_expression(line, counter)
 
     def read_real_expression(self, line: str, counter: int) -> tuple[float, int]:
         counter += 1
@@ -714,6 +741,9 @@ class ReaderMixin:
             return ldmath.rad_to_deg(math.atan2(value, argument2)), counter
         return _execute_unary(value, operation), counter
 
+
+_SEEN = object()  # compiled-value cache: read once so far
+_NEVER = object()  # compiled-value cache: cannot be compiled
 
 _O_KEYWORDS = [
     ("sub", O_sub), ("endsub", O_endsub), ("call", O_call), ("do", O_do),
