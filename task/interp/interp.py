@@ -509,6 +509,7 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, MCodesMixin, OffsetsMixi
                 self.file_pos = index
                 raise InterpError("File ended with no percent sign")
             line = lines[index]
+            self.linetext = line[:LINELEN - 1]  # fgets() leaves the raw line there
             if len(line) >= LINELEN - 1:
                 self.file_lines = lines
                 self.file_pos = index + 1
