@@ -434,13 +434,12 @@ class ReaderMixin:
             else:
                 onumber, counter = self.read_integer_value(line, counter)
                 oname = str(onumber)
-            rest = line[counter:]
-            for word, otype in _O_KEYWORDS:
-                if rest.startswith(word):
-                    block.o_type = otype
-                    counter += len(word)
-                    break
+            keyword = _O_KEYWORD.match(line, counter)
+            if keyword is not None:
+                block.o_type = _O_TYPES[keyword.group()]
+                counter = keyword.end()
             else:
+                rest = line[counter:]
                 if rest == "" or rest[0] in "(;":
                     if self.disable_fanuc_style_sub:
                         raise InterpError(
@@ -751,6 +750,9 @@ _O_KEYWORDS = [
     ("else", O_else), ("endif", O_endif), ("break", O_break), ("continue", O_continue),
     ("endwhile", O_endwhile), ("endrepeat", O_endrepeat), ("return", O_return),
 ]
+# LinuxCNC tries the keywords in this order, as prefixes; so does the alternation
+_O_KEYWORD = re.compile("|".join(word for word, _ in _O_KEYWORDS))
+_O_TYPES = dict(_O_KEYWORDS)
 _O_NAMES = {O_while: "while", O_repeat: "repeat", O_if: "if", O_elseif: "elseif"}
 
 
