@@ -118,4 +118,8 @@ def _libc_hypot():
     return func
 
 
-hypot = _libc_hypot()
+def hypot(x: float, y: float) -> float:
+    """glibc's hypot, loaded on first use (ctypes costs start-up time)."""
+    func = _libc_hypot()
+    globals()["hypot"] = func
+    return func(x, y)
