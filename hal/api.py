@@ -26,6 +26,9 @@ from __future__ import annotations
 import atexit
 import contextlib
 import os
+import signal
+import sys
+import threading
 from collections.abc import Callable
 from typing import Any, ClassVar
 
@@ -306,7 +309,7 @@ def _target(method: Any) -> Any:
     return method.__func__ if isinstance(method, classmethod | staticmethod) else method
 
 
-def funct(name: str = "", *, fp: bool = True) -> Callable[[Callable], Callable]:
+def funct(name: str = "", *, has_fp: bool = True) -> Callable[[Callable], Callable]:
     """Mark a method ``f(self, period_ns)`` as a HAL function of each instance.
 
     ``name`` "" gives the function the instance's name (``and2.0``); otherwise it is
@@ -314,18 +317,18 @@ def funct(name: str = "", *, fp: bool = True) -> Callable[[Callable], Callable]:
     """
 
     def mark(method: Callable) -> Callable:
-        _target(method)._hal_funct = (name, fp)
+        _target(method)._hal_funct = (name, has_fp)
         return method
 
     return mark
 
 
-def module_funct(name: str, *, fp: bool = True) -> Callable[[Callable], Callable]:
+def module_funct(name: str, *, has_fp: bool = True) -> Callable[[Callable], Callable]:
     """Mark a classmethod ``f(cls, instances, period_ns)`` as one function for all instances,
     named ``<module>.<name>`` (``stepgen.make-pulses``)."""
 
     def mark(method: Callable) -> Callable:
-        _target(method)._hal_module_funct = (name, fp)
+        _target(method)._hal_module_funct = (name, has_fp)
         return method
 
     return mark
@@ -369,6 +372,8 @@ class RtComponent:
                 count = int(args.get("count", "1"))
             except ValueError:
                 raise HalError(f"{module}: count must be a number") from None
+            if count < 1:
+                raise HalError(f"{module}: count must be at least 1")
             prefix = cls.prefix or module.replace("_", "-")
             names = [f"{prefix}.{i}" for i in range(count)]
         return [(name, dict(options)) for name in names]
@@ -392,6 +397,11 @@ class RtComponent:
         cls, hal: Hal, comp: str, name: str, options: dict[str, Any] | None = None
     ) -> RtComponent:
         """Make one instance: its pins and parameters in HAL, then ``setup``."""
+        with hal.edit():  # one metadata update for all of the instance's pins
+            return cls._create(hal, comp, name, options)
+
+    @classmethod
+    def _create(cls, hal: Hal, comp: str, name: str, options: dict[str, Any] | None) -> RtComponent:
         attrs: dict[str, Any] = {}
         for decl in cls.declarations():
             count = decl.count
@@ -421,7 +431,7 @@ class RtComponent:
 
     @classmethod
     def functs(cls) -> list[tuple[str, bool, str, bool]]:
-        """(name, uses_fp, method name, is_module_funct) for every marked method."""
+        """(name, has_fp, method name, is_module_funct) for every marked method."""
         found = []
         for attr in dir(cls):
             method = getattr(cls, attr, None)
@@ -438,15 +448,15 @@ class Item:
 
     def __init__(self, hal: Hal, name: str, hal_type: int, direction: int, slot: int) -> None:
         self.hal, self.name, self.type, self.dir, self.slot = hal, name, hal_type, direction, slot
-        self.is_pin = direction in (HAL_IN, HAL_OUT, HAL_IO)
+        self._is_pin = direction in (HAL_IN, HAL_OUT, HAL_IO)
 
     def get(self) -> Any:
-        slot = self.hal.ptr[self.slot] if self.is_pin else self.slot
+        slot = self.hal.ptr[self.slot] if self._is_pin else self.slot
         value = self.hal.read_slot(self.type, slot)
         return bool(value) if self.type == HAL_BIT else value
 
     def set(self, value: Any) -> None:
-        slot = self.hal.ptr[self.slot] if self.is_pin else self.slot
+        slot = self.hal.ptr[self.slot] if self._is_pin else self.slot
         self.hal.write_slot(self.type, slot, value)
 
     def get_name(self) -> str:
@@ -458,8 +468,8 @@ class Item:
     def get_dir(self) -> int:
         return self.dir
 
-    def is_pin_(self) -> bool:
-        return self.is_pin
+    def is_pin(self) -> bool:
+        return self._is_pin
 
 
 class component:
@@ -473,6 +483,7 @@ class component:
         self._hal.new_component(name, "user", os.getpid())
         self._is_alive = True
         atexit.register(self.exit)
+        _exit_on_sigterm()
 
     def newpin(self, name: str, hal_type: int, direction: int) -> Item:
         full = f"{self._prefix}.{name}"
@@ -500,7 +511,8 @@ class component:
     def exit(self) -> None:
         if self._is_alive:
             self._is_alive = False
-            with contextlib.suppress(HalError):
+            # at interpreter exit the HAL may already be gone: nothing left to remove then
+            with contextlib.suppress(HalError, ValueError, OSError):
                 self._hal.remove_component(self._name)
 
     def getprefix(self) -> str:
@@ -520,6 +532,14 @@ class component:
 
     def __exit__(self, *exc: object) -> None:
         self.exit()
+
+
+def _exit_on_sigterm() -> None:
+    """Let ``unload`` (SIGTERM) run the exit handlers that remove the component, unless the
+    program handles SIGTERM itself."""
+    is_main = threading.current_thread() is threading.main_thread()
+    if is_main and signal.getsignal(signal.SIGTERM) is signal.SIG_DFL:
+        signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))
 
 
 # ---------------------------------------------------------------- module-level helpers

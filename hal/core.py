@@ -9,8 +9,9 @@ realtime host, userspace components, halcmd, UIs, tests) sees the same HAL:
   own slot while unlinked, the signal's slot after ``net``. So a linked in pin sees the
   writer's value immediately, like LinuxCNC's pin pointers.
 - the *metadata* segment: names, types, directions, links, functions and threads, as one
-  msgpack document rewritten under the HAL mutex (a POSIX named semaphore). Readers cache
-  the document and reload it only when the generation counter changes.
+  msgpack document rewritten under the HAL mutex (a POSIX named semaphore), alternately in
+  each half of the segment so that a writer dying mid-way leaves the last document intact.
+  Readers cache the document and reload it only when the generation counter changes.
 
 All values are stored in 8-byte slots: floats as doubles, every integer type and bits as
 64-bit integers (bits 0/1, s32/u32 wrapped to their width on write).
@@ -204,11 +205,18 @@ class Hal:
 
     def _load(self) -> None:
         gen = self._header[0]
-        length = self._header[1]
+        # header[1] = 2 * length + (1 when the document is in the second half): one
+        # 8-byte store publishes both
+        length, start = self._header[1] // 2, (self._header[1] % 2) * (META_BYTES // 2)
         if length == 0:
             self._meta = _empty_meta()
         else:
-            self._meta = msgpack.unpackb(self._meta_map[:length], strict_map_key=False)
+            try:
+                self._meta = msgpack.unpackb(
+                    self._meta_map[start : start + length], strict_map_key=False
+                )
+            except (ValueError, msgpack.UnpackException) as exc:
+                raise HalError(f"HAL metadata is damaged ({exc})") from None
         self._cached_gen = gen
 
     @contextlib.contextmanager
@@ -233,18 +241,33 @@ class Hal:
 
     @contextlib.contextmanager
     def edit(self) -> Iterator[dict[str, Any]]:
-        """Lock the HAL, yield the metadata to change, then publish it (nested calls join)."""
+        """Lock the HAL, yield the metadata to change, then publish it.
+
+        Nested calls join the outermost one, which publishes once: wrap many changes in one
+        ``edit`` to make them fast and atomic. An exception discards every change.
+        """
         with self._locked():
             outermost = self._depth == 1
             if outermost:
                 self._load()
-            yield self._meta
+            try:
+                yield self._meta
+            except BaseException:
+                if outermost:
+                    self._cached_gen = -1  # drop the half-made changes: reload next time
+                raise
             if outermost:
                 blob = msgpack.packb(self._meta)
-                if len(blob) > META_BYTES:
+                half = META_BYTES // 2
+                if len(blob) > half:
+                    self._cached_gen = -1
                     raise HalError("HAL metadata area is full")
-                self._meta_map[: len(blob)] = blob
-                self._header[1] = len(blob)
+                # write the half not in use, then switch: a writer dying half-way through
+                # leaves the previous document intact
+                is_second = self._header[1] % 2 == 0
+                start = half if is_second else 0
+                self._meta_map[start : start + len(blob)] = blob
+                self._header[1] = 2 * len(blob) + (1 if is_second else 0)
                 self._header[0] = self._cached_gen + 1
                 self._cached_gen += 1
 
@@ -393,6 +416,11 @@ class Hal:
                 self._load()
             return self._meta
 
+    def versioned_snapshot(self) -> tuple[int, dict[str, Any]]:
+        """(generation, metadata) read together."""
+        with self._locked():
+            return self._header[0], self.snapshot()
+
     def pin_value(self, pin: dict[str, Any]) -> int | float:
         return self.read_slot(pin["type"], self.ptr[pin["slot"]])
 
@@ -492,14 +520,14 @@ class Hal:
         pin["sig"] = None
 
     # ------------------------------------------------------------ functions and threads
-    def new_funct(self, comp: str, name: str, *, uses_fp: bool = True) -> None:
+    def new_funct(self, comp: str, name: str, *, has_fp: bool = True) -> None:
         check_name("function", name)
         with self.edit() as meta:
             if name in meta["functs"]:
                 raise HalError(f"duplicate function '{name}'")
-            meta["functs"][name] = {"owner": comp, "fp": uses_fp, "users": 0}
+            meta["functs"][name] = {"owner": comp, "fp": has_fp, "users": 0}
 
-    def new_thread(self, comp: str, name: str, period_ns: int, *, uses_fp: bool = True) -> None:
+    def new_thread(self, comp: str, name: str, period_ns: int, *, has_fp: bool = True) -> None:
         check_name("thread", name)
         with self.edit() as meta:
             if name in meta["threads"]:
@@ -507,7 +535,7 @@ class Hal:
             meta["threads"][name] = {
                 "owner": comp,
                 "period": int(period_ns),
-                "fp": uses_fp,
+                "fp": has_fp,
                 "functs": [],
             }
 

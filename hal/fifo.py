@@ -13,12 +13,19 @@ import mmap
 import numpy as np
 import posix_ipc
 
-from hal.core import HAL_BIT, HAL_FLOAT, HAL_U32, HAL_U64, HalError
+from hal.core import HAL_BIT, HAL_FLOAT, HAL_S32, HAL_S64, HAL_U32, HAL_U64, HalError
 from nml.ipcnames import ipc_name
 
 HEADER = 4
 #: sampler/streamer config letters (LinuxCNC's) -> HAL types
-CFG_TYPES = {"f": HAL_FLOAT, "b": HAL_BIT, "s": 3, "u": HAL_U32, "l": 6, "k": HAL_U64}
+CFG_TYPES = {
+    "f": HAL_FLOAT,
+    "b": HAL_BIT,
+    "s": HAL_S32,
+    "u": HAL_U32,
+    "l": HAL_S64,
+    "k": HAL_U64,
+}
 
 
 def fifo_name(channel: str) -> str:

@@ -24,9 +24,7 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from hal.core import (
-    DIR_NAMES,
     HAL_IN,
-    HAL_IO,
     HAL_OUT,
     HAL_RO,
     NSLOTS,
@@ -38,7 +36,7 @@ from hal.core import (
     is_compliant_name,
     parse_value,
 )
-from hal.rtapi_app import is_alive, release_if_unused, socket_address
+from hal.rtapi_app import is_alive, purge_dead_components, release_if_unused, socket_address
 
 HOST_START_TIMEOUT_S = 15.0
 USR_READY_TIMEOUT_S = 10.0
@@ -48,6 +46,11 @@ LOCK_LEVELS = {"none": 0, "load": 1, "config": 2, "params": 4, "run": 8, "tune":
 _INI_REF = re.compile(r"\[([^\]]*)\](?:\(([^)]*)\)|([A-Za-z0-9._-]+))")
 _ENV_REF = re.compile(r"\$(?:\(([^)]*)\)|([A-Za-z0-9._-]+))")
 _ARROWS = ("=>", "<=", "<=>")
+# LinuxCNC's HAL tools that HAL files start with loadusr, and what does their job here
+USERSPACE_TOOLS = {
+    "halsampler": [sys.executable, "-m", "cnc", "hal", "sample"],
+    "halstreamer": [sys.executable, "-m", "cnc", "hal", "stream"],
+}
 
 
 # ---------------------------------------------------------------- the realtime host
@@ -303,6 +306,8 @@ class HalCmd:
     def do_loadrt(self, args: list[str]) -> None:
         self._need(args, 1, None, "loadrt name [key=value...]")
         self._check_lock(1, "loading")
+        if not self.host.is_running():
+            purge_dead_components(self.hal)  # leftovers of a host that crashed
         self.host.ensure()
         self.host.call({"cmd": "loadrt", "name": args[0], "args": args[1:]})
 
@@ -334,6 +339,7 @@ class HalCmd:
         if not args:
             raise HalError("loadusr: no program given")
         comp_name = comp_name or Path(args[0]).stem
+        args = [*USERSPACE_TOOLS.get(args[0], [args[0]]), *args[1:]]
         try:
             proc = subprocess.Popen(args, stdin=subprocess.DEVNULL)
         except OSError as exc:
@@ -362,11 +368,15 @@ class HalCmd:
         comp = self.hal.meta["comps"].get(args[0])
         if comp is None or comp["kind"] != "user":
             raise HalError(f"component '{args[0]}' not found or not a user space component")
-        proc = self.user_procs.get(args[0])
+        proc = self.user_procs.pop(args[0], None)
         if proc is not None:
             proc.wait()
-            return
-        while args[0] in self.hal.meta["comps"]:
+        while (comp := self.hal.meta["comps"].get(args[0])) is not None:
+            if not is_alive(comp["pid"]):
+                # it died without removing its component: do it for it
+                with contextlib.suppress(HalError):
+                    self.hal.remove_component(args[0])
+                break
             time.sleep(0.05)
 
     def do_unloadusr(self, args: list[str]) -> None:
@@ -489,7 +499,14 @@ class HalCmd:
     def do_linkpp(self, args: list[str]) -> None:
         args = [a for a in args if a not in _ARROWS]
         self._need(args, 2, 2, "linkpp pin1 pin2")
-        self.do_net([args[0], args[0], args[1]])
+        self._check_lock(2, "linkpp")
+        first = self.hal.find_pin(args[0])
+        if first is None:
+            raise HalError(f"pin '{args[0]}' not found")
+        with self.hal.edit():  # LinuxCNC names the new signal after the first pin
+            self.hal.new_signal(args[0], first[1]["type"])
+            self.hal.link(args[0], args[0])
+            self.hal.link(args[1], args[0])
 
     def do_unlinkp(self, args: list[str]) -> None:
         self._need(args, 1, 1, "unlinkp pinname")
@@ -570,7 +587,10 @@ class HalCmd:
     def do_addf(self, args: list[str]) -> None:
         self._need(args, 2, 3, "addf funcname threadname [position]")
         self._check_lock(2, "addf")
-        position = int(args[2]) if len(args) == 3 else -1
+        try:
+            position = int(args[2]) if len(args) == 3 else -1
+        except ValueError:
+            raise HalError(f"addf: position '{args[2]}' is not a whole number") from None
         self.hal.add_funct(args[0], args[1], position)
 
     def do_delf(self, args: list[str]) -> None:
@@ -933,6 +953,3 @@ def main(argv: list[str] | None = None) -> int:
         if not session.host.is_running():
             release_if_unused(session.hal)
         session.hal.close()
-
-
-__all__ = ["DIR_NAMES", "HAL_IO", "HalCmd", "HostClient", "main"]

@@ -1,9 +1,10 @@
 """The realtime host (LinuxCNC's rtapi_app): loads realtime components and runs HAL threads.
 
-Run as ``python -m hal.rtapi_app [--no-rt]``; halcmd starts it on the first ``loadrt``. It
-listens on an abstract unix socket for commands (loadrt, unloadrt, newthread, exit), one
-JSON object per line, answering ``{"ok": bool, "error": str}``. Pin values never pass
-through the socket: everyone reads and writes them in shared memory.
+Run as ``python -m hal.rtapi_app [--no-rt] [--spin-us N]``; halcmd starts it on the first
+``loadrt``. It listens on an abstract unix socket for commands (ping, loadrt, unloadrt,
+unloadall, modules, exit), one JSON object per line, answering ``{"ok": bool, "error": str,
+...}``. Pin values never pass through the socket: everyone reads and writes them in shared
+memory. The host exits with its last module, like LinuxCNC's.
 
 Each HAL thread is an OS thread that sleeps to absolute deadlines (clock_nanosleep with
 TIMER_ABSTIME on CLOCK_MONOTONIC), then calls its functions in ``addf`` order. It runs
@@ -104,7 +105,9 @@ class _Funct:
 class RtThread(threading.Thread):
     """One periodic HAL thread."""
 
-    def __init__(self, host: Host, name: str, period_ns: int, cpu: int | None) -> None:
+    def __init__(
+        self, host: Host, name: str, period_ns: int, cpu: int | None, *, has_fp: bool = True
+    ) -> None:
         super().__init__(name=f"hal-{name}", daemon=True)
         self.host = host
         self.hal_name = name
@@ -112,31 +115,31 @@ class RtThread(threading.Thread):
         self.cpu = cpu
         self.is_stopping = False
         self.creator = ""
+        self.priority = RT_PRIORITY
         comp = f"__{name}"
-        hal = host.hal
-        hal.new_component(comp, "rt")
         self.comp = comp
-        # slots of the thread's timing pin and parameters
-        self.time = hal.new_pin(comp, f"{name}.time", HAL_S32, HAL_OUT)
-        self.tmax = hal.new_param(comp, f"{name}.tmax", HAL_S32, HAL_RW)
-        self.overruns = hal.new_param(comp, f"{name}.overruns", HAL_S32, HAL_RO)
-        hal.new_thread(comp, name, self.period)
-        hal.ready(comp)
-        #: when set (benchmarks), lateness of each period in ns is stored here in turn
-        self.lateness_log: list[int] | None = None
+        hal = host.hal
+        with hal.edit():
+            hal.new_component(comp, "rt")
+            # slots of the thread's timing pin and parameters
+            self.time = hal.new_pin(comp, f"{name}.time", HAL_S32, HAL_OUT)
+            self.tmax = hal.new_param(comp, f"{name}.tmax", HAL_S32, HAL_RW)
+            self.overruns = hal.new_param(comp, f"{name}.overruns", HAL_S32, HAL_RO)
+            hal.new_thread(comp, name, self.period, has_fp=has_fp)
+            hal.ready(comp)
+        #: when set (benchmarks), each period appends (deadline, start) in ns
+        self.timing_log: list[tuple[int, int]] | None = None
 
     def _chain(self) -> tuple[int, bool, list[_Funct]]:
-        hal = self.host.hal
-        with hal._locked():
-            meta = hal.snapshot()
-            gen = hal.generation
+        """(metadata generation, is HAL started, this thread's functions in addf order)."""
+        gen, meta = self.host.hal.versioned_snapshot()
         info = meta["threads"].get(self.hal_name)
         names = info["functs"] if info else []
         functs = self.host.functs
         return gen, bool(meta["is_running"]), [functs[n] for n in names if n in functs]
 
     def run(self) -> None:
-        self.host.make_realtime(self.cpu)
+        self.host.make_realtime(self.cpu, self.priority)
         hal = self.host.hal
         period = self.period
         spec = _Timespec()
@@ -150,10 +153,10 @@ class RtThread(threading.Thread):
             start = clock()
             while start < deadline:  # optional busy wait: trades CPU for wake-up latency
                 start = clock()
-            log = self.lateness_log
+            log = self.timing_log
             if log is not None:
-                log.append(start - deadline)
-            if hal._header[0] != gen:
+                log.append((deadline, start))
+            if hal.generation != gen:
                 gen, is_running, chain = self._chain()
             if is_running:
                 before = start
@@ -240,7 +243,7 @@ class Host:
         gc.disable()  # no collection pauses inside a period; loadrt freezes what it made
         gc.freeze()
 
-    def make_realtime(self, cpu: int | None) -> None:
+    def make_realtime(self, cpu: int | None, priority: int = RT_PRIORITY) -> None:
         """Run the calling thread on ``cpu`` with SCHED_FIFO where permitted."""
         if not self.is_rt:
             return
@@ -250,7 +253,7 @@ class Host:
             except OSError as exc:
                 self.warn_once("affinity", f"RTAPI: cannot pin thread to CPU {cpu}: {exc}")
         try:
-            os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(RT_PRIORITY))
+            os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))
         except (OSError, AttributeError) as exc:
             self.warn_once(
                 "fifo",
@@ -281,7 +284,25 @@ class Host:
             raise
 
     def loadrt(self, name: str, words: list[str], comp_name: str = "") -> None:
-        """Load a realtime module; ``comp_name`` names its HAL component (default: module)."""
+        """Load a realtime module; ``comp_name`` names its HAL component (default: module).
+
+        Everything the module creates is published in one metadata update (or not at all).
+        """
+        old_functs, old_threads = set(self.functs), set(self.threads)
+        try:
+            with self.hal.edit():
+                self._loadrt(name, words, comp_name)
+        except BaseException:
+            # the metadata is rolled back; drop what this process made to match it
+            for funct in set(self.functs) - old_functs:
+                del self.functs[funct]
+            for thread in set(self.threads) - old_threads:
+                self._stop_thread(thread)
+            raise
+        gc.collect()
+        gc.freeze()
+
+    def _loadrt(self, name: str, words: list[str], comp_name: str) -> None:
         module = self.import_module(name)
         comp_name = comp_name or Path(name).stem
         if comp_name in self.modules:
@@ -303,8 +324,6 @@ class Host:
         loaded.args = " ".join(words)
         self.modules[comp_name] = loaded
         self.hal.ready(comp_name)
-        gc.collect()
-        gc.freeze()
 
     def _load_component(
         self, cls: type[RtComponent], comp_name: str, args: dict[str, str]
@@ -316,43 +335,60 @@ class Host:
             for inst_name, options in wanted:
                 inst = cls.create(self.hal, comp_name, inst_name, options)
                 loaded.instances.append(inst)
-                for fname, uses_fp, method, is_module in cls.functs():
+                for fname, has_fp, method, is_module in cls.functs():
                     if is_module:
                         continue
                     full = f"{inst_name}.{fname}" if fname else inst_name
-                    self.add_function(comp_name, full, getattr(inst, method), uses_fp)
+                    self.add_function(comp_name, full, getattr(inst, method), has_fp)
                     loaded.functs.append(full)
-            for fname, uses_fp, method, is_module in cls.functs():
+            for fname, has_fp, method, is_module in cls.functs():
                 if is_module:
                     full = f"{cls.prefix or comp_name.replace('_', '-')}.{fname}"
                     bound = getattr(cls, method)
                     instances = loaded.instances
                     self.add_function(
-                        comp_name, full, lambda period, b=bound, i=instances: b(i, period), uses_fp
+                        comp_name, full, lambda period, b=bound, i=instances: b(i, period), has_fp
                     )
                     loaded.functs.append(full)
         except Exception:
             self._remove(comp_name)
+            for inst in loaded.instances:
+                with contextlib.suppress(Exception):
+                    inst.teardown()
             raise
         return loaded
 
     def add_function(
-        self, comp: str, name: str, call: Callable[[int], None], uses_fp: bool = True
+        self, comp: str, name: str, call: Callable[[int], None], has_fp: bool = True
     ) -> None:
         """Export a function that threads may run (components and special modules use this)."""
-        self.hal.new_funct(comp, name, uses_fp=uses_fp)
+        self.hal.new_funct(comp, name, has_fp=has_fp)
         self.functs[name] = _Funct(self.hal, comp, name, call)
 
     def new_thread(
-        self, name: str, period_ns: int, creator: str = "", cpu: int | None = None
+        self,
+        name: str,
+        period_ns: int,
+        creator: str = "",
+        cpu: int | None = None,
+        *,
+        has_fp: bool = True,
     ) -> RtThread:
         if name in self.hal.meta["threads"]:
             raise HalError(f"duplicate thread name '{name}'")
         if period_ns < 1000:
             raise HalError(f"thread '{name}': period {period_ns} ns is too short")
+        periods = [t.period for t in self.threads.values()]
+        if periods and period_ns < min(periods):
+            # like LinuxCNC, the fastest thread comes first and sets the clock period
+            raise HalError(
+                f"new thread period {period_ns} is less than clock period {min(periods)}"
+            )
         if cpu is None:
             cpu = (os.cpu_count() or 1) - 1
-        thread = RtThread(self, name, period_ns, cpu)
+        thread = RtThread(self, name, period_ns, cpu, has_fp=has_fp)
+        # threads come fastest first; a faster thread preempts slower ones, as in LinuxCNC
+        thread.priority = max(RT_PRIORITY - len(self.threads), 1)
         thread.creator = creator
         self.threads[name] = thread
         thread.start()
@@ -450,12 +486,19 @@ class Host:
             self.unload_all()
 
 
+def purge_dead_components(hal: Hal) -> list[str]:
+    """Remove components whose process is gone (a crashed userspace program or host)."""
+    with hal.edit() as meta:
+        dead = [name for name, comp in meta["comps"].items() if not is_alive(comp["pid"])]
+        for name in dead:
+            hal.remove_component(name)
+    return dead
+
+
 def release_if_unused(hal: Hal) -> bool:
     """Unlink the HAL segments when no live component is left; True when removed."""
     with hal.edit() as meta:
-        for name, comp in list(meta["comps"].items()):
-            if comp["kind"] == "user" and not is_alive(comp["pid"]):
-                hal.remove_component(name)
+        purge_dead_components(hal)
         is_unused = not meta["comps"]
     if is_unused:
         hal.destroy()

@@ -8,7 +8,17 @@ from __future__ import annotations
 
 from typing import Any
 
-from hal.core import DIR_NAMES, HAL_IN, HAL_IO, HAL_OUT, TYPE_NAMES, Hal, HalError, format_value
+from hal.core import (
+    DIR_NAMES,
+    HAL_IN,
+    HAL_IO,
+    HAL_OUT,
+    HAL_RO,
+    TYPE_NAMES,
+    Hal,
+    HalError,
+    format_value,
+)
 
 _ARROW = {HAL_IN: "<==", HAL_OUT: "==>", HAL_IO: "<=>"}
 _SIG_ARROW = {HAL_IN: "==>", HAL_OUT: "<==", HAL_IO: "<=>"}
@@ -126,7 +136,7 @@ def show_functs(hal: Hal, pattern: str | None, *, is_script: bool) -> list[str]:
         owner = ids.get(funct["owner"], 0)
         code, arg = f"{0x7F0000000000 + owner * 0x1000:012x}", f"{0x7F0001000000 + index * 32:012x}"
         if is_script:
-            lines.append(f"{funct['owner']} {code} {arg} {fp:<4}{funct['users']:>1} {name}")
+            lines.append(f"{funct['owner']} {code} {arg} {fp:<5}{funct['users']} {name}")
         else:
             lines.append(f" {owner:05d}  {code}  {arg}  {fp:<5}{funct['users']:>5}   {name}")
     return lines
@@ -142,16 +152,17 @@ def show_threads(hal: Hal, pattern: str | None, *, is_script: bool) -> list[str]
             "     Period  FP     Name               (     Time, Max-Time )",
         ]
     )
-    for name, thread in sorted(meta["threads"].items(), key=lambda item: item[1]["period"]):
+    for name, thread in reversed(meta["threads"].items()):  # newest first, like LinuxCNC
         if not _match(pattern, name):
             continue
         fp = "YES" if thread["fp"] else "NO"
         spent = _value_of(hal, meta, "pins", f"{name}.time")
         tmax = _value_of(hal, meta, "params", f"{name}.tmax")
         if is_script:
-            lines.append(f"{thread['period']} {fp} {name:<19} {spent:>8} {tmax}")
-        else:
-            lines.append(f"{thread['period']:>11}  {fp:<3}  {name:>20} ( {spent:>8}, {tmax:>8} )")
+            head = f"{thread['period']} {fp} {name} {spent:>8} {tmax}"
+            lines.append(" ".join([head, *thread["functs"]]))
+            continue
+        lines.append(f"{thread['period']:>11}  {fp:<3}  {name:>20} ( {spent:>8}, {tmax:>8} )")
         for index, funct in enumerate(thread["functs"], 1):
             lines.append(f"{index:>19} {funct}")
     return lines
@@ -165,18 +176,27 @@ def _value_of(hal: Hal, meta: dict[str, Any], table: str, name: str) -> int:
     return int(hal.read_slot(item["type"], slot))
 
 
-def show_aliases(hal: Hal, pattern: str | None, *, is_script: bool) -> list[str]:
-    meta = hal.meta
-    lines: list[str] = []
-    for title, table in (("Pin Aliases:", "pin_alias"), ("Parameter Aliases:", "param_alias")):
-        if not is_script:
-            if lines:
-                lines.append("")
-            lines += [title, f" {'Alias':<48} Original Name"]
-        for alias, real in sorted(meta[table].items()):
-            if _match(pattern, alias):
-                lines.append(f" {alias:<48} {real}")
+def _alias_table(hal: Hal, pattern: str | None, table: str, *, is_script: bool) -> list[str]:
+    title = "Pin Aliases:" if table == "pin_alias" else "Parameter Aliases:"
+    lines = [] if is_script else [title, f" {'Alias':<48} Original Name"]
+    for alias, real in sorted(hal.meta[table].items()):
+        if _match(pattern, alias):
+            lines.append(f" {alias}  {real}" if is_script else f" {alias:<48} {real}")
     return lines
+
+
+def show_pin_aliases(hal: Hal, pattern: str | None, *, is_script: bool) -> list[str]:
+    return _alias_table(hal, pattern, "pin_alias", is_script=is_script)
+
+
+def show_param_aliases(hal: Hal, pattern: str | None, *, is_script: bool) -> list[str]:
+    return _alias_table(hal, pattern, "param_alias", is_script=is_script)
+
+
+def show_aliases(hal: Hal, pattern: str | None, *, is_script: bool) -> list[str]:
+    pins = show_pin_aliases(hal, pattern, is_script=is_script)
+    params = show_param_aliases(hal, pattern, is_script=is_script)
+    return [*pins, *([] if is_script else [""]), *params]
 
 
 _SECTIONS = {
@@ -196,7 +216,17 @@ _SECTIONS = {
 def show(hal: Hal, kind: str, pattern: str | None, *, is_script: bool = False) -> str:
     """The text of ``show KIND [PATTERN]``, ending with a blank line like halcmd."""
     if kind == "all":
-        parts = [show_comps, show_pins, show_sigs, show_params, show_functs, show_threads]
+        meta = hal.meta
+        parts = [
+            show_comps,
+            show_pins,
+            *([show_pin_aliases] if meta["pin_alias"] else []),
+            show_sigs,
+            show_params,
+            *([show_param_aliases] if meta["param_alias"] else []),
+            show_functs,
+            show_threads,
+        ]
         return "".join(
             "\n".join(section(hal, pattern, is_script=is_script)) + "\n\n" for section in parts
         )
@@ -273,7 +303,7 @@ def save(hal: Hal, kind: str, modules: dict[str, str]) -> str:
     if kind in ("all", "param", "parameter"):
         out.append("# parameter values")
         for name, param in sorted(meta["params"].items()):
-            if param["dir"] != 64:
+            if param["dir"] != HAL_RO:
                 value = format_value(
                     param["type"], hal.read_slot(param["type"], param["slot"]), is_show=False
                 )
@@ -286,6 +316,6 @@ def save(hal: Hal, kind: str, modules: dict[str, str]) -> str:
                 out.append(f"setp {name} {value:>12}")
     if kind in ("all", "thread"):
         out.append("# realtime thread/function links")
-        for name, thread in sorted(meta["threads"].items(), key=lambda item: item[1]["period"]):
+        for name, thread in meta["threads"].items():
             out += [f"addf {funct} {name}" for funct in thread["functs"]]
     return "\n".join(out) + "\n"

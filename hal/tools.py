@@ -16,12 +16,13 @@ from __future__ import annotations
 import argparse
 import contextlib
 import os
+import signal
 import sys
 import time
 from collections.abc import Iterator
 from typing import Any, TextIO
 
-from hal.core import HAL_BIT, HAL_IN, HAL_OUT, TYPE_NAMES, Hal, HalError, format_value
+from hal.core import HAL_FLOAT, HAL_IN, HAL_OUT, TYPE_NAMES, Hal, HalError, format_value
 from hal.fifo import Fifo, decode, encode
 from hal.halcmd import HostClient
 
@@ -68,13 +69,9 @@ def watch(argv: list[str]) -> int:
 def _format_row(row: Any, types: list[int], is_tagged: bool) -> str:
     values = decode(row[1:], types)
     words = [str(int(row[0]))] if is_tagged else []
-    for value, hal_type in zip(values, types, strict=True):
-        words.append(
-            repr(float(value))
-            if hal_type not in (HAL_BIT,) and isinstance(value, float)
-            else str(int(value))
-        )
-    return " ".join(words)
+    # halsampler's layout: floats with six decimals, each value followed by a space
+    words += [f"{v:f}" if isinstance(v, float) else str(v) for v in values]
+    return "".join(f"{word} " for word in words)
 
 
 def read_samples(fifo: Fifo, types: list[int], out: TextIO, count: int, is_tagged: bool) -> int:
@@ -158,7 +155,9 @@ def sample(argv: list[str]) -> int:
     parser = argparse.ArgumentParser(prog="cnc hal sample", description="record HAL values")
     parser.add_argument("-c", "--channel", default="0", help="sampler channel (halsampler -c)")
     parser.add_argument("-n", "--count", type=int, default=0, help="samples (0: until ^C)")
-    parser.add_argument("-t", "--tag", action="store_true", help="print sample numbers")
+    parser.add_argument(
+        "-t", "--tag", dest="is_tagged", action="store_true", help="print sample numbers"
+    )
     parser.add_argument("-T", "--thread", help="record PINs every period of THREAD")
     parser.add_argument("-o", "--output", help="file (default: stdout)")
     parser.add_argument("args", nargs="*", help="FILE, or PINs with -T")
@@ -172,7 +171,7 @@ def sample(argv: list[str]) -> int:
             with _private_channel("sampler", opts.thread, opts.args, hal, 16384) as (ch, types):
                 fifo = Fifo.open(ch)
                 try:
-                    read_samples(fifo, types, out, opts.count, opts.tag)
+                    read_samples(fifo, types, out, opts.count, opts.is_tagged)
                 finally:
                     fifo.close()
         else:
@@ -182,7 +181,7 @@ def sample(argv: list[str]) -> int:
             types = _channel_types(hal, channel, HAL_IN)
             fifo = Fifo.open(channel)
             try:
-                read_samples(fifo, types, out, opts.count, opts.tag)
+                read_samples(fifo, types, out, opts.count, opts.is_tagged)
             finally:
                 fifo.close()
     except HalError as exc:
@@ -208,7 +207,8 @@ def write_stream(fifo: Fifo, types: list[int], lines: TextIO, source: str) -> in
             raise HalError(f"{source}:{number}: {len(words)} values, expected {len(types)}")
         try:
             values = [
-                float(w) if t == 2 else int(float(w)) for w, t in zip(words, types, strict=True)
+                float(w) if t == HAL_FLOAT else int(float(w))
+                for w, t in zip(words, types, strict=True)
             ]
         except ValueError:
             raise HalError(f"{source}:{number}: bad number in '{line.strip()}'") from None
@@ -265,6 +265,8 @@ def main(argv: list[str] | None = None) -> int:
     if not args or args[0] not in tools:
         print(__doc__, file=sys.stderr if args else sys.stdout)
         return 2 if args else 0
+    # a plain `kill` still unwires what sample/stream wired
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))
     try:
         return tools[args[0]](args[1:])
     except HalError as exc:

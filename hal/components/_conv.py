@@ -13,7 +13,7 @@ def make(source: str, target: str) -> type[RtComponent]:
     low, high = _RANGES.get(target, (None, None))
     src_low, src_high = _RANGES.get(source, (float("-inf"), float("inf")))
     can_overflow = low is not None and (src_low < low or src_high > high)
-    uses_fp = "float" in (source, target)
+    has_fp = "float" in (source, target)
     attrs: dict[str, object] = {
         "in_": pin(f"{source} in"),
         "out": pin(f"{target} out"),
@@ -40,5 +40,5 @@ def make(source: str, target: str) -> type[RtComponent]:
         def update(self: RtComponent, period: int) -> None:
             self.out = convert(self.in_)
 
-    attrs["update"] = funct(fp=uses_fp)(update)
+    attrs["update"] = funct(has_fp=has_fp)(update)
     return type(f"Conv_{source}_{target}", (RtComponent,), attrs)

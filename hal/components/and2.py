@@ -8,7 +8,7 @@ class And2(RtComponent):
     in1 = pin("bit in")
     out = pin("bit out")
 
-    @funct(fp=False)
+    @funct(has_fp=False)
     def update(self, period: int) -> None:
         self.out = self.in0 and self.in1
 

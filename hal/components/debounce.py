@@ -1,7 +1,8 @@
 """debounce: filter noisy inputs; ``loadrt debounce cfg=N[,M...]`` makes groups of N pins.
 
 Each period a counter per pin goes up while ``in`` is true and down while false; ``out``
-becomes true when it reaches the group's ``delay`` and false when it reaches zero.
+becomes true on the period after it reached the group's ``delay``, false on the period
+after it reached zero.
 """
 
 from typing import Any
@@ -28,21 +29,23 @@ class Debounce(RtComponent):
     def setup(self, size: int = 1) -> None:
         self.counts = [0] * size
 
-    @funct(fp=False)
+    @funct(has_fp=False)
     def update(self, period: int) -> None:
+        if self.delay < 0:
+            self.delay = 1
         delay = self.delay
         ins, outs, counts = self.in_, self.out, self.counts
         for i in range(len(counts)):
+            # the output changes on the call after the counter reached its end
             if ins[i]:
                 if counts[i] < delay:
                     counts[i] += 1
-                if counts[i] >= delay:
+                else:
                     outs[i] = True
+            elif counts[i] > 0:
+                counts[i] -= 1
             else:
-                if counts[i] > 0:
-                    counts[i] -= 1
-                if counts[i] == 0:
-                    outs[i] = False
+                outs[i] = False
 
 
 COMPONENT = Debounce

@@ -20,7 +20,7 @@ class Edge(RtComponent):
     def setup(self) -> None:
         self.is_first = True
 
-    @funct(fp=False)
+    @funct(has_fp=False)
     def update(self, period: int) -> None:
         value = self.in_
         left = self.time_left_ns

@@ -14,7 +14,7 @@ class Flipflop(RtComponent):
     def setup(self) -> None:
         self.old_clk = False
 
-    @funct(fp=False)
+    @funct(has_fp=False)
     def update(self, period: int) -> None:
         clk = self.clk
         out = self.out

@@ -7,7 +7,7 @@ class Not(RtComponent):
     in_ = pin("bit in")
     out = pin("bit out")
 
-    @funct(fp=False)
+    @funct(has_fp=False)
     def update(self, period: int) -> None:
         self.out = not self.in_
 

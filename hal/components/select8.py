@@ -8,7 +8,7 @@ class Select8(RtComponent):
     out = pin("bit out", "out{}", count=8)
     enable = pin("bit in", default=1)
 
-    @funct(fp=False)
+    @funct(has_fp=False)
     def update(self, period: int) -> None:
         sel = self.sel if self.enable else -1
         out = self.out

@@ -12,6 +12,10 @@ from typing import Any
 
 from hal.api import RtComponent, funct, pin
 
+# LinuxCNC's siggen uses pi rounded to 8 digits; using the same value keeps recorded
+# waveforms identical (sine is -4.6e-8, not 0, at half a cycle)
+LINUXCNC_PI = 3.1415927
+
 
 class Siggen(RtComponent):
     square = pin("float out")
@@ -55,7 +59,7 @@ class Siggen(RtComponent):
         self.square = square * amp + offset
         self.sawtooth = saw * amp + offset
         self.triangle = (2.0 * saw * square - 1.0) * amp + offset
-        angle = 2.0 * math.pi * phase
+        angle = 2.0 * LINUXCNC_PI * phase
         self.sine = math.sin(angle) * amp + offset
         self.cosine = math.cos(angle) * amp + offset
 

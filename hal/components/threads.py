@@ -25,7 +25,10 @@ def rtapi_app_main(host: Any, comp: str, args: dict[str, str]) -> None:
             period = int(args.get(f"period{i}", ""))
         except ValueError:
             raise HalError(f"threads: period{i} must be a number of nanoseconds") from None
-        host.new_thread(name, period)
+        fp = args.get(f"fp{i}", "1")
+        if fp not in ("0", "1"):
+            raise HalError(f"threads: fp{i} must be 0 or 1")
+        host.new_thread(name, period, has_fp=fp == "1")
         made += 1
     if not made:
         raise HalError("threads: no thread given (name1=... period1=...)")

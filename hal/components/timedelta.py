@@ -26,7 +26,7 @@ class Timedelta(RtComponent):
         self.count = 0
         self.total_err = 0
 
-    @funct(fp=False)
+    @funct(has_fp=False)
     def update(self, period: int) -> None:
         now = time.monotonic_ns()
         if self.reset or self.last == 0:

@@ -12,7 +12,7 @@ class Toggle(RtComponent):
         self.count = 0
         self.is_pressed = False
 
-    @funct(fp=False)
+    @funct(has_fp=False)
     def update(self, period: int) -> None:
         limit = self.debounce
         if not 1 <= limit <= 10000:  # keep a sane delay, as LinuxCNC does

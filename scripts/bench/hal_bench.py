@@ -6,7 +6,9 @@ Prints one JSON object:
 
 - ``idle`` / ``loaded``: lateness of each period's start after its absolute deadline
   (p50/p99/p99.9/max in µs), ``overruns`` (periods whose functions ran past the next
-  deadline) and ``periods`` measured. ``loaded`` runs one busy process per other CPU.
+  deadline) and ``periods`` measured; ``interval_jitter`` has the same statistics for
+  |time between two period starts - period|, the metric measured for LinuxCNC. ``loaded``
+  runs one busy process per other CPU.
 - ``pin_rw_ns``: cost of one pin access (read or write) from a component's function.
 - ``lcnc`` (when LinuxCNC's halrun is installed): LinuxCNC's 1 ms thread measured with its
   ``timedelta`` component and ``halsampler`` (|interval - period|, the only per-period timing
@@ -17,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import gc
+import itertools
 import json
 import multiprocessing
 import os
@@ -162,7 +165,6 @@ def measure_ours(seconds: float, is_loaded: bool, spin_us: int) -> dict[str, Any
             elif not cmd.run_words(words):
                 raise RuntimeError(f"bench config failed at: {line}")
         thread = host.new_thread("servo-thread", PERIOD_NS)
-        thread.lateness_log = []
         for funct in FUNCTS:
             hal.add_funct(funct, "servo-thread")
         load = start_load() if is_loaded else []
@@ -172,14 +174,22 @@ def measure_ours(seconds: float, is_loaded: bool, spin_us: int) -> dict[str, Any
             time.sleep(0.2)
             overrun_slot = hal.meta["params"]["servo-thread.overruns"]["slot"]
             before = hal.q[overrun_slot]
-            thread.lateness_log = log = []
+            thread.timing_log = log = []
             time.sleep(seconds)
-            thread.lateness_log = None
+            thread.timing_log = None
             overruns = hal.q[overrun_slot] - before
             tmax = hal.q[hal.meta["params"]["servo-thread.tmax"]["slot"]]
         finally:
             stop_load(load)
-        return {**summary(log, int(overruns)), "thread_tmax_us": round(tmax / 1000, 1)}
+        lateness = [start - deadline for deadline, start in log]
+        starts = [start for _, start in log]
+        jitter = [abs(b - a - PERIOD_NS) for a, b in itertools.pairwise(starts)]
+        return {
+            **summary(lateness, int(overruns)),
+            "thread_tmax_us": round(tmax / 1000, 1),
+            # the metric measured for LinuxCNC below, for a like-for-like comparison
+            "interval_jitter": summary(jitter, int(overruns)),
+        }
     finally:
         host.unload_all()
         set_shared_hal(None)

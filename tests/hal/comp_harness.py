@@ -6,9 +6,9 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import Any
 
-from hal.api import RtComponent
+from hal.api import RtComponent, set_shared_hal
 from hal.core import Hal
-from hal.rtapi_app import Host, parse_module_args
+from hal.rtapi_app import Host
 
 PERIOD = 1_000_000
 
@@ -47,11 +47,6 @@ def bench(module: str, args: str = "") -> Iterator[Bench]:
     try:
         yield Bench(hal, module, args)
     finally:
-        from hal.api import set_shared_hal
-
         set_shared_hal(None)
         hal.destroy()
         hal.close()
-
-
-__all__ = ["PERIOD", "Bench", "bench", "parse_module_args"]

@@ -7,7 +7,7 @@ import math
 import pytest
 
 from hal.core import HalError
-from tests.hal.comp_harness import bench
+from tests.hal.comp_harness import Bench, bench
 
 
 @pytest.mark.parametrize(
@@ -81,9 +81,12 @@ def test_arithmetic_components() -> None:
         b.inst.in0, b.inst.in1 = 3.0, 2.0
         b.run()
         assert b.inst.out == 1.5
-        b.inst.in1 = 0.0
+        b.inst.in1, b.inst.deadband = 0.0, 0.5
         b.run()
-        assert b.inst.out == 0.0
+        assert b.inst.out == 6.0  # divided by +deadband, as LinuxCNC 2.9 does
+        b.inst.in1 = -0.1
+        b.run()
+        assert b.inst.out == -6.0
     with bench("abs") as b:
         b.inst.in_ = -2.0
         b.run()
@@ -225,12 +228,12 @@ def test_timedelay_and_debounce() -> None:
         assert b.inst.out
     with bench("debounce", "cfg=2,1") as b:
         assert b.value("debounce.0.delay") == 5
-        b.hal.write_slot(3, b.hal.find_param("debounce.0.delay")[1]["slot"], 3)
         first = b.instances[0]
+        first.delay = 3
         first.in_[1] = True
-        b.run(2)
+        b.run(3)  # the counter reaches 3...
         assert not first.out[1]
-        b.run(1)
+        b.run(1)  # ...and the next period sets the output
         assert first.out[1] and not first.out[0]
         assert b.hal.find_pin("debounce.1.0.in") is not None
 
@@ -242,11 +245,12 @@ def test_siggen_waveforms() -> None:
         sig.reset = True
         b.run()
         assert (sig.sine, sig.sawtooth) == (pytest.approx(1.0), 1.0)
-        assert (sig.square, sig.cosine, sig.triangle) == (-1.0, -1.0, -1.0)
+        assert (sig.square, sig.triangle) == (-1.0, -1.0)
+        assert sig.cosine == pytest.approx(-1.0)
         sig.reset = False
         b.run(250)  # a quarter cycle after mid-cycle
         assert sig.sine == pytest.approx(1.0 - 2.0)
-        assert sig.cosine == pytest.approx(1.0, abs=1e-9)
+        assert sig.cosine == pytest.approx(1.0, abs=1e-6)
         assert sig.triangle == pytest.approx(1.0, abs=1e-9)
         assert sig.sawtooth == pytest.approx(2.0)
         assert sig.square == 3.0 and sig.clock
@@ -317,7 +321,8 @@ def test_sim_home_switch_hysteresis_and_index() -> None:
 
 
 def test_sim_encoder_drives_encoder() -> None:
-    with bench("sim_encoder", "num_chan=1") as sim, bench_shared(sim, "encoder") as enc:
+    with bench("sim_encoder", "num_chan=1") as sim:
+        enc = Bench(sim.hal, "encoder")  # a second module in the same HAL
         sim.inst.speed, sim.inst.ppr = 10.0, 25  # 1000 edges/s
         enc.inst.position_scale = 100.0
         for _ in range(100):  # 100 ms of 20 us base periods and 1 ms servo periods
@@ -327,22 +332,10 @@ def test_sim_encoder_drives_encoder() -> None:
                 enc.inst.phase_A, enc.inst.phase_B = sim.inst.phase_A, sim.inst.phase_B
                 enc.run(1, 20_000, functs=["encoder.update-counters"])
             enc.run(1, functs=["encoder.capture-position"])
-        assert enc.inst.counts == pytest.approx(100, abs=1)
-        assert enc.inst.position == pytest.approx(1.0, abs=0.01)
+        # 1000 steps/s for 0.1 s, plus the first edge the encoder sees at start (00 -> A)
+        assert enc.inst.counts == pytest.approx(101, abs=1)
+        assert enc.inst.position == enc.inst.counts / 100
         assert enc.inst.velocity == pytest.approx(10.0, rel=0.1)
-
-
-def bench_shared(other, module: str):  # type: ignore[no-untyped-def]
-    """A second module loaded into the same HAL as ``other``."""
-    from contextlib import contextmanager
-
-    from tests.hal.comp_harness import Bench
-
-    @contextmanager
-    def make():  # type: ignore[no-untyped-def]
-        yield Bench(other.hal, module)
-
-    return make()
 
 
 def test_encoder_x1_mode_counter_mode_and_index() -> None:
@@ -362,9 +355,10 @@ def test_encoder_x1_mode_counter_mode_and_index() -> None:
         assert enc.counts == 10  # x1: one count per full cycle
         enc.x4_mode = True
         enc.index_enable = True
+        b.run(functs=["encoder.capture-position"])  # capture arms the index...
         enc.phase_Z = True
         b.run(functs=["encoder.update-counters", "encoder.capture-position"])
-        assert enc.counts == 0 and not enc.index_enable
+        assert enc.counts == 0 and not enc.index_enable  # ...and the next rising Z zeroes
 
 
 def test_stepgen_velocity_and_position_modes() -> None:
@@ -391,8 +385,7 @@ def test_stepgen_velocity_and_position_modes() -> None:
         assert steps == vel.counts
         assert vel.position_fb == pytest.approx(1.0, abs=0.01)
         assert pos.counts == 50
-        assert pos.position_fb == 0.5
-        assert not pos.dir
+        assert pos.position_fb == pytest.approx(0.5, abs=0.005)  # within half a step
         pos.position_cmd = 0.0
         for _ in range(1000):
             b.run(1, functs=["stepgen.update-freq"])
@@ -473,9 +466,21 @@ def test_more_documented_edge_cases() -> None:
         b.run()
         assert b.inst.debounce == 2
     with bench("limit3") as b:
-        b.inst.load, b.inst.in_ = True, 1.0
-        b.run()
-        b.inst.load, b.inst.enable = False, False
-        b.inst.maxv, b.inst.maxa = 10.0, 100.0
+        b.inst.maxv, b.inst.maxa, b.inst.in_ = 10.0, 100.0, 1.0
         b.run(500)
-        assert b.inst.out == 0.0
+        assert b.inst.out == pytest.approx(1.0)
+        b.inst.enable = False  # back to 0 under the same limits
+        b.run(500)
+        assert b.inst.out == pytest.approx(0.0, abs=1e-9)
+
+
+def test_encoder_counter_mode_counts_rising_edges_of_phase_a() -> None:
+    with bench("encoder", "num_chan=1") as b:
+        enc = b.inst
+        enc.counter_mode = True
+        seen = []
+        for a, direction in [(1, 0), (0, 0), (1, 0), (0, 1), (1, 1), (0, 1), (1, 1), (1, 1)]:
+            enc.phase_A, enc.phase_B = a, direction
+            b.run(functs=["encoder.update-counters", "encoder.capture-position"])
+            seen.append(enc.counts)
+        assert seen == [1, 1, 2, 2, 3, 3, 4, 4]  # phase-B is ignored

@@ -94,6 +94,11 @@ def test_errors_name_file_line_and_cause(tmp_path: Path) -> None:
         "frobnicate\n": "Unknown command 'frobnicate'",
         "loadrt and2\nsetp and2.0.out 1\n": "pin 'and2.0.out' is not writable",
         "loadrt and2\nsetp and2.0.in0 maybe\n": "value 'maybe' invalid for bit",
+        "loadrt or2 count=0\n": "or2: count must be at least 1",
+        "loadrt threads name1=t period1=1000000\nloadrt and2\naddf and2.0 t x\n": (
+            "addf: position 'x' is not a whole number"
+        ),
+        "loadrt threads name1=t period1=nope\n": "threads: period1 must be a number",
     }
     for text, cause in cases.items():
         result = halrun_text(tmp_path, text)
@@ -183,3 +188,27 @@ def test_substitution_happens_before_the_line_is_split(tmp_path: Path, monkeypat
     assert result.stdout.split() == ["TRUE", "TRUE"]
     missing = halrun_text(tmp_path, "newsig s bit\nsets s $(NO_SUCH_VARIABLE_HERE)\n")
     assert "test.hal:2: Environment variable 'NO_SUCH_VARIABLE_HERE' not found" in (missing.stderr)
+
+
+def test_threads_fastest_first_fp_flag_and_script_layout(tmp_path: Path) -> None:
+    # expected lines are LinuxCNC 2.9's `halrun -s` output for the same file
+    text = (
+        "loadrt threads name1=base period1=50000 fp1=0 name2=servo-thread period2=1000000\n"
+        "loadrt and2 count=1\naddf and2.0 servo-thread\nshow thread\n"
+    )
+    result = halrun_text(tmp_path, text, "-s")
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.splitlines()[:2] == [
+        "1000000 YES servo-thread        0 0 and2.0",
+        "50000 NO base        0 0",
+    ]
+    slower_first = halrun_text(
+        tmp_path, "loadrt threads name1=slow period1=1000000 name2=fast period2=50000\n"
+    )
+    assert "new thread period 50000 is less than clock period 1000000" in slower_first.stderr
+    rolled_back = halrun_text(
+        tmp_path,
+        "loadrt threads name1=slow period1=1000000 name2=fast period2=50000\nlist thread\n",
+        "-k",
+    )
+    assert rolled_back.stdout.strip() == ""  # a failed loadrt leaves no thread behind

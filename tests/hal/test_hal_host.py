@@ -80,3 +80,25 @@ def test_loadrt_errors_leave_nothing_half_loaded(tmp_path: Path) -> None:
     result = halrun_text(tmp_path, "loadrt pid num_chan=x\nlist comp\n", "-k")
     assert "pid: count must be a number" in result.stderr
     assert result.stdout.strip() == ""
+
+
+def test_stepgen_steps_from_a_base_thread(tmp_path: Path) -> None:
+    text = (
+        "loadrt threads name1=base-thread period1=100000 name2=servo-thread period2=1000000\n"
+        "loadrt stepgen step_type=0 ctrl_type=v\n"
+        "addf stepgen.make-pulses base-thread\n"
+        "addf stepgen.capture-position servo-thread\naddf stepgen.update-freq servo-thread\n"
+        "setp stepgen.0.position-scale 1000\nsetp stepgen.0.enable 1\n"
+        "setp stepgen.0.velocity-cmd -1\nstart\n"
+        + SLEEP.replace("0.05", "0.2")
+        + "stop\n"
+        + SLEEP
+        + "getp stepgen.0.counts\ngetp stepgen.0.position-fb\n"
+        "getp stepgen.0.dir\n"
+    )
+    result = halrun_text(tmp_path, text)
+    assert result.returncode == 0, result.stderr
+    counts, position, direction = result.stdout.split()
+    assert int(counts) < 0
+    assert float(position) == pytest.approx(int(counts) / 1000, abs=1 / 1000)
+    assert direction == "TRUE"

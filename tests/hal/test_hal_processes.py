@@ -83,3 +83,16 @@ def test_halcmd_interactive_reads_commands_from_stdin(tmp_path: Path) -> None:
     lines = result.stdout.splitlines()
     assert lines[0] == "50"
     assert "u32      0x00000032  s" in lines
+
+
+def test_a_new_host_replaces_a_crashed_one(procs) -> None:  # type: ignore[no-untyped-def]
+    host = procs.python("-m", "hal.rtapi_app", "--no-rt")
+    assert host.stdout.readline().strip() == "rtapi_app: ready"
+    assert run_cnc("halcmd", "loadrt", "and2").returncode == 0
+    host.kill()
+    host.wait(timeout=10)
+    again = run_cnc("halcmd", "loadrt", "and2")  # starts a new host, forgets the dead one's
+    assert again.returncode == 0, again.stderr
+    listed = run_cnc("halcmd", "list", "comp")
+    assert listed.stdout.split() == ["and2"]
+    assert run_cnc("halcmd", "unload", "all").returncode == 0

@@ -22,7 +22,7 @@ def test_sample_records_every_period_with_sample_numbers(tmp_path: Path) -> None
     )
     result = halrun_text(tmp_path, text)
     assert result.returncode == 0, result.stderr
-    assert out.read_text().splitlines() == [f"{n} 2.5 1 -7" for n in range(5)]
+    assert out.read_text().splitlines() == [f"{n} 2.500000 1 -7 " for n in range(5)]
 
 
 def test_stream_plays_lines_into_pins_one_per_period(tmp_path: Path) -> None:
@@ -56,7 +56,7 @@ def test_sample_and_stream_wire_themselves_with_a_thread(tmp_path: Path) -> None
     )
     result = halrun_text(tmp_path, text)
     assert result.returncode == 0, result.stderr
-    assert out.read_text().splitlines() == ["40.0 4.0"] * 3
+    assert out.read_text().splitlines() == ["40.000000 4.000000 "] * 3
     assert result.stdout.split() == ["scale", "__servo-thread", "threads"]
 
 
@@ -82,3 +82,21 @@ def test_sample_of_a_missing_channel_is_an_error(tmp_path: Path) -> None:
     result = halrun_text(tmp_path, text)
     assert result.returncode == 1
     assert "cnc hal sample: channel 'sampler.3' not found" in result.stderr
+
+
+def test_a_bad_sampler_config_leaves_no_fifo(tmp_path: Path) -> None:
+    result = halrun_text(tmp_path, "loadrt sampler depth=10 cfg=ff,fz\n")
+    assert result.returncode == 1
+    assert "bad cfg letter 'z'" in result.stderr
+    # the autouse fixture fails the test if the first channel's FIFO segment is left
+
+
+def test_linuxcnc_halsampler_lines_run_our_tool(tmp_path: Path) -> None:
+    text = (
+        "loadrt threads name1=servo-thread period1=1000000\n"
+        "loadrt sampler depth=100 cfg=s\nsetp sampler.0.pin.0 42\n"
+        "addf sampler.0 servo-thread\nstart\nloadusr -w halsampler -c 0 -n 2\n"
+    )
+    result = halrun_text(tmp_path, text)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.splitlines() == ["42 ", "42 "]
