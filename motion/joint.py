@@ -8,7 +8,7 @@ the HAL-facing switch bits that homing reads.
 Each servo period the motion component does, per joint:
 
 1. ``update_feedback(motor_pos_fb)``: pos_fb = motor_pos_fb - offset - compensation (MOT-007);
-2. homing (``motion.homing``) and the planners set ``pos_cmd`` (free mode: ``free.step``);
+2. homing (``motion.homing``) and the planners set ``pos_cmd`` (free mode: ``planner.step``);
 3. ``update_command(dt)``: motor_pos_cmd = pos_cmd + compensation + offset (MOT-005);
 4. ``is_following_error()``: fault when the error exceeds the speed-scaled limit (MOT-074).
 """
@@ -109,7 +109,7 @@ class Joint:
         backlash: float = 0.0,
         comp: CompTable | None = None,
     ) -> None:
-        self.free = FreePlanner(max_vel, max_acc, min_limit, max_limit)
+        self.planner = FreePlanner(max_vel, max_acc, min_limit, max_limit)
         self.set_ferror(ferror, min_ferror)
         self.backlash = check_finite("backlash", backlash)
         if self.backlash < 0:
@@ -130,26 +130,26 @@ class Joint:
         self.ferror_high_mark = 0.0
         self._is_forward = True
         # HAL-facing bits: inputs set by the caller, outputs read by it
-        self.home_sw_in = False
-        self.index_enable = False  # out when homing sets it, cleared by the encoder driver
-        self.pos_lim_sw_in = False
-        self.neg_lim_sw_in = False
+        self.is_home_switch_on = False
+        self.is_index_enabled = False  # out when homing sets it, cleared by the encoder driver
+        self.is_on_pos_limit = False
+        self.is_on_neg_limit = False
         self.is_unlocked = False  # locking indexer feedback
-        self.unlock = False  # locking indexer command
-        self.homing = False
-        self.homed = False
+        self.is_unlock_requested = False  # locking indexer command
+        self.is_homing = False
+        self.is_homed = False
 
     @property
     def max_vel(self) -> float:
-        return self.free.max_vel
+        return self.planner.max_vel
 
     @property
     def min_limit(self) -> float:
-        return self.free.min_limit
+        return self.planner.min_limit
 
     @property
     def max_limit(self) -> float:
-        return self.free.max_limit
+        return self.planner.max_limit
 
     def set_ferror(self, ferror: float, min_ferror: float) -> None:
         """FERROR is the limit at full speed, MIN_FERROR at rest (MOT-074)."""
@@ -196,6 +196,12 @@ class Joint:
     def is_following_error(self) -> bool:
         return abs(self.ferror) > self.following_error_limit()
 
+    def hold_position(self) -> None:
+        """Command the position the joint is at (enabling, MOT-030): no jump."""
+        self.pos_cmd = self.coarse_pos = self.pos_fb
+        self.planner.reset(self.pos_fb)
+        self._last_cmd = None
+
     def set_position(self, pos: float) -> None:
         """Declare the current feedback position to be ``pos`` without moving the motor
         (homing): shifts the home offset and every internal position together."""
@@ -206,11 +212,11 @@ class Joint:
         self.pos_cmd += shift
         self.pos_fb += shift
         self.coarse_pos += shift
-        self.free.pos += shift
-        self.free.target += shift
+        self.planner.pos += shift
+        self.planner.target += shift
         self.motor_offset -= shift
         if self._last_cmd is not None:
             self._last_cmd += shift
 
     def is_on_limit_switch(self) -> bool:
-        return self.pos_lim_sw_in or self.neg_lim_sw_in
+        return self.is_on_pos_limit or self.is_on_neg_limit

@@ -33,8 +33,13 @@ def import_module(name: str, builtin_package: str, what: str) -> ModuleType:
 
 
 def missing_names(obj: object, required: Iterable[str]) -> list[str]:
-    """The names of ``required`` that ``obj`` lacks or that are not callable."""
-    return [n for n in required if not callable(getattr(obj, n, None))]
+    """The names of ``required`` that ``obj`` lacks as a function or property."""
+    missing = []
+    for name in required:
+        value = getattr(obj, name, None)
+        if not (callable(value) or isinstance(value, property)):
+            missing.append(name)
+    return missing
 
 
 def require(obj: object, required: Iterable[str], what: str) -> None:

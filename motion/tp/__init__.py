@@ -9,16 +9,15 @@ incomplete one is refused with an error listing what is missing.
 from __future__ import annotations
 
 from motion.modules import import_module, require
-from motion.tp.planner import ProbeType, TermCond, TrajectoryPlanner
+from motion.tp.planner import Planner, ProbeType, TermCond, TrajectoryPlanner
 
-# every public function of the default planner; a replacement must provide them all
+# every public function and status property of the default planner: a replacement
+# must provide them all (plain attributes set in __init__, such as pos, are not checked)
 REQUIRED_FUNCTIONS = tuple(
     name
     for name, value in vars(TrajectoryPlanner).items()
-    if not name.startswith("_") and callable(value)
+    if not name.startswith("_") and (callable(value) or isinstance(value, property))
 )
-
-Planner = TrajectoryPlanner
 
 
 def load_planner(name: str = "planner") -> type:
@@ -29,4 +28,11 @@ def load_planner(name: str = "planner") -> type:
     return module.Planner
 
 
-__all__ = ["REQUIRED_FUNCTIONS", "ProbeType", "TermCond", "TrajectoryPlanner", "load_planner"]
+__all__ = [
+    "REQUIRED_FUNCTIONS",
+    "Planner",
+    "ProbeType",
+    "TermCond",
+    "TrajectoryPlanner",
+    "load_planner",
+]

@@ -5,14 +5,18 @@ more path pieces (``geometry``); under G64 the corner between two lines is repla
 tangent arc that stays within the P tolerance, so the path has no velocity jumps and its
 speed is limited only by the axis limits (speed cap and tangential acceleration per piece).
 
-Lookahead: every appended piece runs a backward pass that raises the planned exit speeds
-of the pieces before it as far as braking allows (the queue tail always ends at rest). It
-stops as soon as a speed does not change, so each append costs a few pieces, not the queue.
+Lookahead: once per servo period a backward pass over the pieces queued since the last
+one raises the planned exit speeds of the pieces before them as far as braking allows
+(the queue tail always ends at rest); it stops as soon as a speed does not change, so its
+cost is the braking distance, not the queue. A period that crosses from one piece into
+the next can only use the lower of their accelerations, so the first and last stretch of
+each piece is planned with that (``Piece.zones``): plan and servo period agree exactly.
 
 Servo period (``step``): the path speed follows the cap with bounded acceleration and
-brakes onto the planned exit speeds, onto feed changes ahead (feed differs per move and
-overrides change at any time) and onto requested stops (pause, step, abort, probe trip).
-Integration is trapezoidal, so the discrete braking distance equals the planned one.
+brakes onto the planned curve of the pieces this period may reach, onto feed changes
+ahead (feed differs per move and overrides change at any time) and onto requested stops
+(pause, step, abort, probe trip). Integration is trapezoidal, so the discrete braking
+distance equals the planned one and stops land exactly on their point.
 """
 
 from __future__ import annotations
@@ -35,6 +39,11 @@ NORMAL_FRACTION = 0.5
 KINK_FRACTION = 0.45
 # Fraction of the axis acceleration limits the planner plans with.
 ACC_MARGIN = 0.995
+# A blend must be estimated at least this much faster than a stop (fraction of the stop's
+# time loss) to be chosen.
+BLEND_GAIN = 0.85
+# Pieces queued before the lookahead's backward pass runs (see _backward_pass).
+REPLAN_BATCH = 16
 # Largest blend deviation as a fraction of the shorter line (G64 without P).
 TOLERANCE_FRACTION = 0.25
 # Largest per-axis change of the unit tangent passed without stopping (about 3 degrees).
@@ -71,6 +80,7 @@ class Move:
     tolerance: float
     end_s: float = 0.0  # cumulative path position of the move's end
     probe: ProbeType | None = None
+    is_error_without_trip: bool = True  # probe moves: G38.2/G38.4 (True), G38.3/G38.5
     line: LinePiece | None = None  # the move's line piece when it is a line (for blending)
 
 
@@ -144,6 +154,8 @@ class TrajectoryPlanner:
         self._is_stopping = False
         self._is_aborting = False
         self._step_end: float | None = None  # cumulative position where STEP stops
+        self._first_dirty: int | None = None  # first piece whose plan is out of date
+        self._reach = 0.0  # braking distance from the fastest queued piece, with margin
         self._probe_armed = False
         self.is_paused = False
         self.distance_to_go = 0.0
@@ -214,11 +226,16 @@ class TrajectoryPlanner:
         acc: float,
         motion_id: int = 0,
         probe: ProbeType = ProbeType.TOWARD,
+        is_error_without_trip: bool = True,
     ) -> None:
         """Queue a probe move (PROBE, MOT-056): it stops on the probe edge, records the
-        position and empties the queue. The tripped flag is cleared here (MOT-057)."""
+        position and empties the queue. The tripped flag is cleared here (MOT-057).
+        Reaching the end without a trip is an error (G38.2/G38.4) unless
+        ``is_error_without_trip`` is false (G38.3/G38.5)."""
         self.probe_tripped = False
         self.add_line(end, vel, ini_maxvel, acc, motion_id, TermCond.STOP, probe=probe)
+        if self._moves and self._moves[-1].probe is not None:
+            self._moves[-1].is_error_without_trip = is_error_without_trip
 
     def add_circle(
         self,
@@ -299,7 +316,10 @@ class TrajectoryPlanner:
             self._feed_points.append((piece.s0, move))
         self._moves.append(move)
         self._end = piece.end if isinstance(piece, LinePiece) else piece.point(piece.length)
-        self._backward_pass(first_changed)
+        if self._first_dirty is None or first_changed < self._first_dirty:
+            self._first_dirty = first_changed
+        dt = self.cycle_time
+        self._reach = max(self._reach, piece.vplan**2 / piece.acc + 20.0 * piece.vplan * dt)
 
     def _join(self, prev_move: Move, tail: Piece, move: Move, piece: Piece) -> int:
         """Set the junction between the queue tail and a new piece: a blend arc under G64
@@ -351,14 +371,26 @@ class TrajectoryPlanner:
         tan_half = math.tan(0.5 * turn)
         cos_half = math.cos(0.5 * turn)
         radius = min(avail / tan_half, tolerance * cos_half / (1.0 - cos_half))
-        v_full = min(line1.vplan, line2.vplan)
+        # cruising speeds of the two lines; the arc runs at the first move's feed
+        v1 = min(line1.vplan, move.vel)
+        v2 = min(line2.vplan, line2.move.vel)
+        w_full = min(v1, v2)
+        # Beyond the radius that allows w_full, a larger arc only adds time when it is
+        # longer to run at w_full than the two cuts at their own speeds (a sharp corner
+        # or different feeds); then the arc stays at that radius, closest to the corner.
+        if turn / w_full > tan_half * (1.0 / v1 + 1.0 / v2):
+            inward = (line2.direction - cos_turn * line1.direction) / math.sin(turn)
+            plane = np.sqrt(line1.direction**2 + inward**2)
+            curved = plane > EPS
+            plane_acc = float(np.min(self._plan_acc[curved] / plane[curved]))
+            radius = min(radius, w_full * w_full / (NORMAL_FRACTION * plane_acc))
         d = radius * tan_half
         if d <= 1e-9:
             return None
         arc = blend_arc(move, line1.end, line1.direction, line2.direction, radius, turn)
-        self._piece_limits(arc, v_full, min(line1.acc, line2.acc))
-        speed = min(v_full, move.vel, line2.move.vel)
-        if not _is_blend_faster(speed, arc, 2 * d, min(line1.acc, line2.acc)):
+        acc = min(line1.acc, line2.acc)
+        self._piece_limits(arc, min(line1.vplan, line2.vplan), acc)
+        if not _is_blend_faster(v1, v2, arc, d, acc):
             return None
         if is_running:  # the runtime must still be able to brake onto the arc's speed
             room = line1.length - d - self._s - self.vel * self.cycle_time
@@ -405,9 +437,23 @@ class TrajectoryPlanner:
         pieces.append(piece)
         return first
 
-    def _backward_pass(self, first_changed: int) -> None:
-        """Raise planned exit speeds from the tail back while they change (lookahead)."""
+    def _backward_pass(self) -> None:
+        """Raise planned exit speeds from the tail back while they change (lookahead).
+
+        Each pass recomputes the braking ramp at the queue's end, whatever number of
+        pieces came since the last one, so passes are batched: one runs when
+        ``REPLAN_BATCH`` pieces are waiting, or earlier when the servo period gets within
+        braking reach of the first piece whose plan is out of date. Farther pieces may wait:
+        the period only uses the plan of the pieces it can reach."""
+        first_changed = self._first_dirty
+        if first_changed is None:
+            return
         pieces = self._pieces
+        here = pieces[self._head].s0 + self._s
+        stale_from = pieces[max(first_changed, self._head)].s0
+        if len(pieces) - first_changed < REPLAN_BATCH and stale_from - here > self._reach:
+            return
+        self._first_dirty = None
         v_next_entry = 0.0  # the tail ends at rest
         sqrt = math.sqrt
         for i in range(len(pieces) - 1, self._head - 1, -1):
@@ -416,10 +462,18 @@ class TrajectoryPlanner:
             if i < first_changed and v_exit == p.v_exit:
                 break
             p.v_exit = v_exit
-            head, acc_head, body, tail, acc_tail = p.zones()
-            p.v_mid = sqrt(v_exit * v_exit + 2.0 * acc_tail * tail)
-            p.v_body = sqrt(p.v_mid * p.v_mid + 2.0 * p.acc * body)
-            v_next_entry = sqrt(p.v_body * p.v_body + 2.0 * acc_head * head)
+            # Piece.zones, inlined: this loop is the planner's hottest
+            length, window, acc = p.length, p.window, p.acc
+            if length < 2.0 * window:
+                low = min(p.acc_head, acc, p.acc_tail)
+                v_next_entry = p.v_mid = p.v_body = sqrt(v_exit * v_exit + 2.0 * low * length)
+            else:
+                tail_acc = p.acc_tail if p.acc_tail < acc else acc
+                head_acc = p.acc_head if p.acc_head < acc else acc
+                v_mid = sqrt(v_exit * v_exit + 2.0 * tail_acc * window)
+                v_body = sqrt(v_mid * v_mid + 2.0 * acc * (length - 2.0 * window))
+                p.v_mid, p.v_body = v_mid, v_body
+                v_next_entry = sqrt(v_body * v_body + 2.0 * head_acc * window)
             if v_next_entry > p.vplan:
                 v_next_entry = p.vplan
 
@@ -467,6 +521,7 @@ class TrajectoryPlanner:
         if not self._moves:
             self.vel = 0.0
             return self.pos
+        self._backward_pass()
         dt = self.cycle_time
         pieces = self._pieces
         p = pieces[self._head]
@@ -476,8 +531,9 @@ class TrajectoryPlanner:
             return self.pos
         v = self.vel
         acc = p.acc
-        if self._is_stopping:
-            self._advance(0.5 * (v + max(v - acc * dt, 0.0)) * dt, max(v - acc * dt, 0.0))
+        if self._is_stopping:  # pause, abort, probe trip: brake along the path
+            v_new = max(v - self._touched_acc(v) * dt, 0.0)
+            self._advance(0.5 * (v + v_new) * dt, v_new)
             return self.pos
         scale = self.rapid_scale if move.is_rapid else self.feed_scale
         v_new = min(move.vel * scale, p.vcap)
@@ -522,6 +578,20 @@ class TrajectoryPlanner:
         self._advance(0.5 * (v + v_new) * dt, v_new)
         return self.pos
 
+    def _touched_acc(self, v: float) -> float:
+        """The lowest acceleration of the pieces this period may touch at speed ``v``."""
+        pieces = self._pieces
+        p = pieces[self._head]
+        dt = self.cycle_time
+        reach = p.s0 + self._s + (v + p.acc * dt) * dt
+        acc = p.acc
+        for j in range(self._head + 1, len(pieces)):
+            q = pieces[j]
+            if q.s0 >= reach:
+                break
+            acc = min(acc, q.acc)
+        return acc
+
     def _is_stop_point(self, p: Piece) -> bool:
         if p.v_exit <= 0.0:
             return True
@@ -559,7 +629,9 @@ class TrajectoryPlanner:
                 self._reset_queue(self.pos)
             else:
                 self.is_paused = True
-        if self._head > 512:
+        if self._head > 512:  # drop the pieces done; indices shift down with them
+            if self._first_dirty is not None:
+                self._first_dirty = max(self._first_dirty - self._head, 0)
             del pieces[: self._head]
             self._head = 0
 
@@ -574,7 +646,7 @@ class TrajectoryPlanner:
         if self._moves and self._moves[0] is move:
             self._moves.popleft()
             self._probe_armed = False
-            if move.probe is not None and not self.probe_tripped:
+            if move.probe is not None and not self.probe_tripped and move.is_error_without_trip:
                 self.error = "probe move finished without the probe tripping"
 
     def _check_probe(self, move: Move) -> None:
@@ -595,28 +667,43 @@ class TrajectoryPlanner:
 
 
 def _piece_braking(q: Piece, dist: float, v: float, dt: float) -> float:
-    """Highest next speed that can still reach the planned exit of ``q``, ``dist`` ahead,
-    along the curve the lookahead planned zone by zone (``Piece.zones``)."""
-    _head, acc_head, body, tail, acc_tail = q.zones()
+    """Highest next speed that keeps to the curve the lookahead planned for ``q`` (zone
+    by zone, ``Piece.zones``), with ``dist`` from here to the end of ``q``.
+
+    The zone we are in is checked against its end speed at its own acceleration, and so
+    is the next zone, where this period may end; a zone's curve drawn back into a zone
+    of lower acceleration would be stricter than the plan, so no farther zone is used."""
+    head, acc_head, body, tail, acc_tail = q.zones()
     if dist <= tail:
         return braking_speed(dist, v, acc_tail, dt, q.v_exit)
-    dist -= tail
-    if dist <= body:
-        return braking_speed(dist, v, q.acc, dt, q.v_mid)
-    return braking_speed(dist - body, v, acc_head, dt, q.v_body)
+    in_tail_next = braking_speed(dist, v, acc_tail, dt, q.v_exit)
+    if body > 0.0 and dist <= tail + body:
+        return min(braking_speed(dist - tail, v, q.acc, dt, q.v_mid), in_tail_next)
+    if body > 0.0:  # in the head zone (or before the piece): head and body ends
+        return min(
+            braking_speed(dist - tail - body, v, acc_head, dt, q.v_body),
+            braking_speed(dist - tail, v, q.acc, dt, q.v_mid),
+        )
+    if head > 0.0:  # no body: head then tail
+        return min(braking_speed(dist - tail, v, acc_head, dt, q.v_body), in_tail_next)
+    return in_tail_next
 
 
-def _is_blend_faster(speed: float, arc: ArcPiece, cut: float, acc: float) -> bool:
-    """Whether passing a corner on ``arc`` costs less time than stopping at it, counted
-    against cruising at ``speed`` over the ``cut`` of line length the arc replaces: a stop
-    loses speed/acc; the arc loses the slowdown to its own speed and back, plus its length
-    at that speed, minus the shortcut. (A tiny tolerance on a sharp corner makes a slow
-    arc, and stopping exactly on the corner is then faster.)"""
-    w = min(arc.vcap, speed)
+def _is_blend_faster(v1: float, v2: float, arc: ArcPiece, cut: float, acc: float) -> bool:
+    """Whether passing a corner on ``arc`` costs less time than stopping at it. Losses are
+    counted against cruising each line at its speed (``v1`` in, ``v2`` out): a stop loses
+    the time to brake to rest and to speed up again; the arc loses the slowdown to its
+    own speed and back, plus its length at that speed minus the ``cut`` it saves on each
+    line. (A tiny tolerance on a sharp corner makes a slow arc; stopping exactly on the
+    corner is then faster.)"""
+    w = min(arc.vcap, v1, v2)
     if w <= 0:
         return False
-    slowdown = (speed - w) ** 2 / (acc * speed) + arc.length / w - cut / speed
-    return slowdown < speed / acc
+    stop = 0.5 * (v1 + v2) / acc
+    slowdown = 0.5 * ((v1 - w) ** 2 / v1 + (v2 - w) ** 2 / v2) / acc
+    blend = slowdown + arc.length / w - cut / v1 - cut / v2
+    # the estimate ignores the lower acceleration near the arc: demand a clear gain
+    return blend < BLEND_GAIN * stop
 
 
 def _check_scale(scale: float) -> float:
@@ -626,4 +713,5 @@ def _check_scale(scale: float) -> float:
     return scale
 
 
+# the name a replacement planner module exports (motion.tp.load_planner, ARCH-008)
 Planner = TrajectoryPlanner

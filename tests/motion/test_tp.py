@@ -421,6 +421,14 @@ def test_probe_move_without_contact_reports_an_error() -> None:
     assert tp.take_error() is None
 
 
+def test_probe_without_contact_is_fine_for_g38_3() -> None:
+    tp = planner()
+    tp.add_probe(pose(2, 0, 0), 10.0, 53.34, AMAX, 5, is_error_without_trip=False)
+    Run(tp).until_done()
+    assert not tp.probe_tripped and tp.take_error() is None
+    assert tp.pos[0] == pytest.approx(2)
+
+
 def test_probe_already_tripped_is_an_error() -> None:
     tp = planner()
     tp.probe_input = True
@@ -484,3 +492,41 @@ def test_load_planner_default_and_incomplete_replacement() -> None:  # ARCH-008
         assert "add_line," not in message
     finally:
         del sys.modules["half_tp"]
+
+
+@settings(max_examples=20, deadline=None)
+@given(
+    steps=st.lists(
+        st.tuples(
+            st.booleans(),  # arc or line
+            st.tuples(st.floats(-4, 4), st.floats(-4, 4), st.floats(-1, 1)),  # end
+            st.tuples(st.floats(-3, 3), st.floats(-3, 3)),  # arc centre offset in its plane
+            st.sampled_from([(0, 0, 1), (0, 0, -1), (0, 1, 0), (1, 0, 0)]),
+            st.integers(0, 1),  # extra turns
+        ),
+        min_size=1,
+        max_size=5,
+    ),
+    feed=st.floats(2, 40),
+    term=st.sampled_from(list(TermCond)),
+)
+def test_any_mix_of_arcs_and_lines_stays_within_limits(steps, feed, term) -> None:
+    tp = planner()
+    here = np.zeros(3)
+    for n, (is_arc, end, offset, normal, turns) in enumerate(steps, start=1):
+        end = np.array(end)
+        if is_arc:
+            axes = [i for i in range(3) if normal[i] == 0]
+            centre = here.copy()
+            centre[axes[0]] += offset[0]
+            centre[axes[1]] += offset[1]
+            try:
+                tp.add_circle(pose(*end), centre, normal, turns, feed, 53.34, AMAX, n, term)
+            except ValueError:
+                continue  # start or end on the centre: rejected, as it must be
+        else:
+            tp.add_line(pose(*end), feed, 53.34, AMAX, n, term)
+        here = end
+    run = Run(tp).until_done()
+    run.assert_within_limits()
+    assert np.allclose(run.path[-1][:3], here, atol=1e-9)
