@@ -38,7 +38,7 @@ class IoConfig:
 def _resolve(ini: IniFile, section: str, key: str, default: str | None) -> Path | None:
     """A file named in the INI: ``~`` expanded, relative to the folder of the line naming it."""
     entry = ini.entry(section, key)
-    text = entry.value if entry is not None else default
+    text = entry.value if entry is not None and entry.value else default  # empty: unset
     if text is None:
         return None
     path = Path(os.path.expanduser(text))

@@ -415,6 +415,8 @@ class ShmBuffer:
                 wait = max(0.0, min(wait, deadline - time.monotonic()))
             try:
                 self._mutex.acquire(wait)
+            except posix_ipc.SignalError:
+                continue  # interrupted by a signal whose handler has run: wait again
             except posix_ipc.BusyError:
                 if self._repair_after_dead_holder():
                     continue
@@ -802,8 +804,10 @@ class ShmBuffer:
 
 
 def _try_acquire(sem: posix_ipc.Semaphore, timeout: float | None = 0) -> bool:
+    """Take ``sem`` within ``timeout``; False if it stayed busy or a signal interrupted the
+    wait (the signal's handler has run: the caller re-checks why it was waiting)."""
     try:
         sem.acquire(timeout)
-    except posix_ipc.BusyError:
+    except (posix_ipc.BusyError, posix_ipc.SignalError):
         return False
     return True

@@ -284,6 +284,8 @@ class stat:  # LinuxCNC's name: linuxcnc.stat
             latest = self._link.buffer(EMC_STATUS).peek()
         except NmlError as exc:
             raise error(str(exc)) from None
+        if latest is None:  # buffers made, task not publishing yet: not up (like LinuxCNC)
+            raise error("the controller is starting: no status published yet")
         if type(latest) is EMC_STAT:
             self._status = latest
         self.__dict__.clear()  # attributes are computed again from the new status

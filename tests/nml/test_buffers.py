@@ -262,3 +262,19 @@ def test_overwritten_segment_header_is_a_clear_error(opened) -> None:
         reader.peek()
     master._mm[0:4] = (0x314C4D4E).to_bytes(4, "little")
     assert reader.peek().counter == 1
+
+
+def test_a_signal_during_a_blocking_read_ends_the_wait_cleanly(opened) -> None:
+    import os
+    import signal
+
+    opened("m", "q")
+    reader = opened("r", "q")
+    received = []
+    previous = signal.signal(signal.SIGUSR1, lambda *_: received.append(1))
+    try:
+        threading.Timer(0.1, os.kill, (os.getpid(), signal.SIGUSR1)).start()
+        assert reader.blocking_read(5) is None  # interrupted: no message, no exception
+        assert received == [1]
+    finally:
+        signal.signal(signal.SIGUSR1, previous)
