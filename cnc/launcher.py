@@ -1,0 +1,271 @@
+"""``cnc run CONFIG.ini``: start a machine from its INI file, like LinuxCNC's ``linuxcnc``.
+
+Start-up, in LinuxCNC's order (ARCH-009/010): the NML buffers (this process is their master),
+the realtime host, iocontrol ([EMCIO]EMCIO, as the userspace HAL component ``iocontrol``),
+the HAL files ([HAL]HALFILE, then [HAL]HALCMD lines, with ``[SECTION]KEY`` taken from the
+INI), task ([TASK]TASK), the display ([DISPLAY]DISPLAY), then [HAL]POSTGUI_HALFILE.
+
+Shut-down, when the display exits or on SIGINT/SIGTERM (ARCH-011): display, task (saves
+parameters and positions), HAL (``unload all``: motion, iocontrol, which saves the tool
+table), the realtime host, the buffers; nothing is left in /dev/shm. A step that fails
+reports why (with file:line for INI and HAL files) and everything started so far is stopped
+again.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import os
+import shlex
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from cnc.ini import IniError, IniFile
+from cnc.runtime import read_runtime_info, remove_runtime_info, write_runtime_info
+from nml.channels import DEFAULT_NML_FILE, EMC_STATUS, Nml, load_config
+from nml.config import NmlConfig
+from nml.errors import NmlError
+from nml.ipcnames import INSTANCE_ENV, current_instance, remove_instance_objects
+
+READY_TIMEOUT_S = 20.0
+# [DISPLAY]DISPLAY values that are our own user interfaces (anything else is run as given)
+OUR_DISPLAYS = {"top": ["top"], "sh": ["sh"], "web": ["ui", "web"]}
+
+
+class LaunchError(Exception):
+    """A start-up step failed; the message says which and why."""
+
+
+class Launcher:
+    def __init__(self, ini_path: str, is_headless: bool = False) -> None:
+        self.ini_path = str(Path(ini_path).resolve())
+        self.folder = Path(self.ini_path).parent
+        self.is_headless = is_headless
+        self.ini = IniFile.load(self.ini_path)
+        self.nml: Nml | None = None
+        self.host: subprocess.Popen[bytes] | None = None
+        self.task: subprocess.Popen[bytes] | None = None
+        self.display: subprocess.Popen[bytes] | None = None
+        self.is_hal_loaded = False
+        self.is_stopping = False
+
+    # ------------------------------------------------------------------ start-up
+    def start(self) -> None:
+        running = read_runtime_info()
+        if running is not None:
+            raise LaunchError(
+                f"a machine is already running for instance '{current_instance()}' "
+                f"(pid {running.get('pid')}, {running.get('ini')}): stop it first, or set "
+                f"{INSTANCE_ENV} to run another one"
+            )
+        leftovers = remove_instance_objects()
+        if leftovers:
+            say(f"removed {len(leftovers)} stale shared-memory objects of a previous run")
+        nml_file = self._nml_file()
+        config = load_config(nml_file)
+        say(f"NML buffers from {nml_file}")
+        self.nml = Nml(config, _master_process(config))
+        os.environ["CNC_NML_FILE"] = nml_file
+        os.environ["CNC_INI_FILE"] = self.ini_path
+        self._start_host()
+        if self.ini.find("EMCIO", "EMCIO"):
+            say("starting iocontrol")
+            self._halcmd(
+                "loadusr",
+                "-Wn",
+                "iocontrol",
+                sys.executable,
+                "-m",
+                "iocontrol",
+                "-ini",
+                self.ini_path,
+            )
+        for hal_file in self.ini.findall("HAL", "HALFILE"):
+            self._run_hal_file(hal_file)
+        for line in self.ini.findall("HAL", "HALCMD"):
+            self._halcmd(*shlex.split(line))
+        self._halcmd("start")  # the threads run from now on, as LinuxCNC starts them here
+        self._start_task()
+        write_runtime_info(self.ini_path, nml_file)
+        self._start_display()
+        for hal_file in self.ini.findall("HAL", "POSTGUI_HALFILE"):
+            self._run_hal_file(hal_file)
+        say(f"machine ready ({self.ini_path})")
+
+    def _nml_file(self) -> str:
+        name = self.ini.find("EMC", "NML_FILE")
+        if not name:
+            return str(DEFAULT_NML_FILE)
+        path = Path(name).expanduser()
+        if not path.is_absolute():
+            path = self.folder / path
+        if not path.exists():
+            entry = self.ini.entry("EMC", "NML_FILE")
+            raise LaunchError(f"{entry.file}:{entry.line}: NML file not found: {path}")
+        return str(path)
+
+    def _start_host(self) -> None:
+        say("starting the realtime host")
+        self.host = subprocess.Popen(
+            [sys.executable, "-m", "hal.rtapi_app"],
+            stdout=subprocess.PIPE,
+            cwd=self.folder,
+            process_group=0,  # Ctrl-C reaches the launcher, which stops things in order
+        )
+        line = self.host.stdout.readline().decode(errors="replace").strip()
+        if line != "rtapi_app: ready":
+            raise LaunchError(f"the realtime host did not start ({line or 'no answer'})")
+
+    def _run_hal_file(self, name: str) -> None:
+        path = Path(name).expanduser()
+        if not path.is_absolute():
+            path = self.folder / path
+        if not path.exists():
+            raise LaunchError(f"{self.ini_path}: [HAL] file not found: {path}")
+        if path.suffix == ".tcl":
+            raise LaunchError(f"{path}: Tcl HAL files are not supported; use halcmd syntax")
+        say(f"running {path.name}")
+        self._halcmd("-f", str(path))
+        self.is_hal_loaded = True
+
+    def _halcmd(self, *args: str) -> None:
+        """Run halcmd; it prints its own errors (file:line: cause). Its output is not
+        captured: programs it starts with loadusr keep running and would hold a pipe open."""
+        result = subprocess.run(
+            [sys.executable, "-m", "cnc", "halcmd", "-i", self.ini_path, *args], cwd=self.folder
+        )
+        self.is_hal_loaded = True
+        if result.returncode != 0:
+            raise LaunchError(f"halcmd {' '.join(args)} failed (see the message above)")
+
+    def _start_task(self) -> None:
+        say("starting task")
+        self.task = subprocess.Popen(
+            [sys.executable, "-m", "task", "-ini", self.ini_path],
+            cwd=self.folder,
+            process_group=0,
+        )
+        status = self.nml[EMC_STATUS]
+        deadline = time.monotonic() + READY_TIMEOUT_S
+        while status.peek() is None:
+            if self.task.poll() is not None:
+                raise LaunchError(f"task exited at start-up (status {self.task.returncode})")
+            if time.monotonic() > deadline:
+                raise LaunchError(f"task did not publish its status within {READY_TIMEOUT_S} s")
+            time.sleep(0.01)
+
+    def _start_display(self) -> None:
+        display = (self.ini.find("DISPLAY", "DISPLAY") or "").strip()
+        if self.is_headless or not display:
+            say("no display (headless): stop with Ctrl-C or SIGTERM")
+            return
+        words = shlex.split(display)
+        if words[0] in OUR_DISPLAYS:
+            command = [
+                sys.executable,
+                "-m",
+                "cnc",
+                *OUR_DISPLAYS[words[0]],
+                *words[1:],
+                self.ini_path,
+            ]
+        else:
+            command = [*words, "-ini", self.ini_path]  # as LinuxCNC starts its GUIs
+        say(f"starting the display: {' '.join(words)}")
+        try:
+            self.display = subprocess.Popen(command, cwd=self.folder)
+        except OSError as exc:
+            raise LaunchError(f"cannot start [DISPLAY]DISPLAY = {display}: {exc}") from None
+
+    # ------------------------------------------------------------------ running
+    def wait(self) -> int:
+        """Until the display exits, a signal arrives, or task or the host dies."""
+        while not self.is_stopping:
+            if self.display is not None and self.display.poll() is not None:
+                return 0
+            for name, proc in (("task", self.task), ("the realtime host", self.host)):
+                if proc is not None and proc.poll() is not None:
+                    say(f"{name} exited unexpectedly (status {proc.returncode}); shutting down")
+                    return 1
+            time.sleep(0.05)
+        return 0
+
+    # ------------------------------------------------------------------ shut-down
+    def stop(self) -> None:
+        """Stop everything that was started, newest first; safe to call at any point."""
+        say("shutting down")
+        _terminate(self.display, "display")
+        _terminate(self.task, "task", timeout=10)
+        if self.is_hal_loaded and self.host is not None and self.host.poll() is None:
+            subprocess.run(
+                [sys.executable, "-m", "cnc", "halcmd", "unload", "all"],
+                cwd=self.folder,
+                stderr=subprocess.DEVNULL,
+                stdout=subprocess.DEVNULL,
+            )
+        _terminate(self.host, "realtime host")
+        if self.nml is not None:
+            self.nml.close()
+        remove_runtime_info()
+        leftovers = remove_instance_objects()
+        if leftovers:
+            say(f"removed {len(leftovers)} shared-memory objects left by crashed processes")
+        say("stopped")
+
+
+def _master_process(config: NmlConfig) -> str:
+    """The NML process that creates the buffers: ours is ``cnc``, LinuxCNC's ``emcsvr``."""
+    masters = [p.name for p in config.processes if p.is_master]
+    if "cnc" in masters:
+        return "cnc"
+    if not masters:
+        raise LaunchError(f"{config.path}: no P line is master of the buffers")
+    return masters[0]
+
+
+def _terminate(proc: subprocess.Popen[bytes] | None, name: str, timeout: float = 5) -> None:
+    if proc is None or proc.poll() is not None:
+        return
+    proc.terminate()
+    try:
+        proc.wait(timeout)
+    except subprocess.TimeoutExpired:
+        say(f"{name} did not stop within {timeout:g} s: killing it")
+        proc.kill()
+        with contextlib.suppress(subprocess.TimeoutExpired):
+            proc.wait(5)
+
+
+def say(text: str) -> None:
+    print(f"cnc: {text}", file=sys.stderr, flush=True)
+
+
+def main(argv: list[str]) -> int:
+    parser = argparse.ArgumentParser(prog="cnc run", description=__doc__.split("\n\n")[0])
+    parser.add_argument("ini", help="the machine's INI file")
+    parser.add_argument("--headless", action="store_true", help="run without [DISPLAY]DISPLAY")
+    args = parser.parse_args(argv)
+    try:
+        launcher = Launcher(args.ini, is_headless=args.headless)
+    except IniError as exc:
+        say(str(exc))
+        return 1
+
+    def on_signal(signum: int, _frame: object) -> None:
+        launcher.is_stopping = True
+
+    signal.signal(signal.SIGTERM, on_signal)
+    signal.signal(signal.SIGINT, on_signal)
+    status = 1
+    try:
+        launcher.start()
+        status = launcher.wait()
+    except (LaunchError, NmlError, IniError) as exc:
+        say(str(exc))
+    finally:
+        launcher.stop()
+    return status

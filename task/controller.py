@@ -1,0 +1,686 @@
+"""Task: states, modes, MDI and programs, turned into motion and iocontrol commands.
+
+One loop (TASK-001..021), every [TASK]CYCLE_TIME or as soon as a command arrives:
+
+1. take the next command from ``emcCommand`` and answer it on ``emcStatus`` (EXEC, then
+   DONE or ERROR with the command's serial number; refusals also on ``emcError``);
+2. plan: while a program or MDI command runs, read ahead with the interpreter, whose canon
+   queues NML messages; a queue buster (M6, M66, G38 ... INTERP_EXECUTE_FINISH) stops the
+   reading until everything queued has been carried out, then ``synch()`` reloads the
+   interpreter's world model from the machine's (TASK-008..010);
+3. execute: send the queued messages in order, to motion (moves go straight into its
+   queue) or iocontrol (after motion has finished), or carry them out here (dwell, M0/M1,
+   program end, operator messages);
+4. publish EMC_STAT = {task, motion, io}, always right after a command changes something.
+"""
+
+from __future__ import annotations
+
+import enum
+import logging
+import shlex
+import subprocess
+import time
+from collections import deque
+from collections.abc import Callable, Sequence
+
+from cnc.atomicfile import atomic_write_text
+from cnc.ini import IniFile
+from nml import emc
+from nml.channels import (
+    EMC_COMMAND,
+    EMC_ERROR,
+    EMC_STATUS,
+    MOTION_COMMAND,
+    MOTION_STATUS,
+    TOOL_COMMAND,
+    TOOL_STATUS,
+    Nml,
+)
+from nml.errors import NmlError
+from nml.message import RCS_STATUS, MessageKind
+from task.interp.errors import INTERP_ENDFILE, INTERP_EXECUTE_FINISH, INTERP_EXIT, InterpError
+from task.setup import MachineSetup, load_setup
+
+log = logging.getLogger("task")
+
+MODE = emc.EMC_TASK_MODE_ENUM
+STATE = emc.EMC_TASK_STATE_ENUM
+EXEC = emc.EMC_TASK_EXEC_ENUM
+INTERP = emc.EMC_TASK_INTERP_ENUM
+READAHEAD = 50  # messages queued ahead of motion while reading a program
+
+
+class Run(enum.Enum):
+    """What the interpreter is doing for us."""
+
+    IDLE = 0
+    MDI = 1
+    PROGRAM = 2
+
+
+def _is_motion_message(msg: emc.NMLmsg) -> bool:
+    return 100 <= msg.TYPE < 400 or 1300 <= msg.TYPE < 1400
+
+
+def _is_io_message(msg: emc.NMLmsg) -> bool:
+    return 1100 <= msg.TYPE < 1700 and not 1300 <= msg.TYPE < 1400
+
+
+class Task:
+    def __init__(self, ini: IniFile, nml: Nml, canon_factory: Callable | None = None) -> None:
+        from task.canon import CanonSetup, TaskCanon
+        from task.interp.interp import Interpreter
+
+        self.ini = ini
+        self.setup: MachineSetup = load_setup(ini)
+        self.nml = nml
+        self.stat = emc.EMC_STAT()
+        canon_setup = CanonSetup(
+            linear_units=self.setup.linear_units,
+            axis_mask=self.setup.axis_mask,
+            axis_max_vel=[
+                self.setup.axes[i].max_vel if i in self.setup.axes else float("inf")
+                for i in range(9)
+            ],
+            axis_max_acc=[
+                self.setup.axes[i].max_acc if i in self.setup.axes else float("inf")
+                for i in range(9)
+            ],
+            max_velocity=self.setup.max_velocity,
+            max_acceleration=self.setup.max_acceleration,
+            random_toolchanger=self.setup.random_toolchanger,
+        )
+        self.canon = (canon_factory or TaskCanon)(canon_setup)
+        self.interp = Interpreter(
+            self.canon, ini=ini, parameter_file=self.setup.parameter_file, task=1
+        )
+        self.interp.init()
+        self.queue: deque[emc.NMLmsg] = self.canon.out
+        self.mode = MODE.MANUAL
+        self.state = STATE.ESTOP
+        self.run = Run.IDLE
+        self.is_paused = False
+        self.is_reading_done = True  # the interpreter has nothing more to read for this run
+        self.is_waiting_for_synch = False
+        self.is_optional_stop = False
+        self.is_block_delete = False
+        self.delay_until = 0.0
+        self.mdi_queue: deque[tuple[int, str]] = deque()
+        self.pending_serial = 0  # a command still running (MDI), answered DONE when finished
+        self.last_motion_serial = 0
+        self.last_io_serial = 0
+        self.checked_motion_serial = 0
+        self.file = ""
+        self.system_command: subprocess.Popen[bytes] | None = None
+        self.handlers: dict[type, Callable[[emc.NMLmsg], str | bool | None]] = {
+            emc.EMC_TASK_SET_STATE: self._set_state,
+            emc.EMC_TASK_SET_MODE: self._set_mode,
+            emc.EMC_TASK_PLAN_EXECUTE: self._mdi,
+            emc.EMC_TASK_PLAN_OPEN: self._open,
+            emc.EMC_TASK_PLAN_RUN: self._run_program,
+            emc.EMC_TASK_PLAN_PAUSE: self._pause,
+            emc.EMC_TASK_PLAN_RESUME: self._resume,
+            emc.EMC_TASK_PLAN_STEP: self._step,
+            emc.EMC_TASK_ABORT: self._abort_command,
+            emc.EMC_TASK_PLAN_INIT: self._plan_init,
+            emc.EMC_TASK_PLAN_SYNCH: self._synch,
+            emc.EMC_TASK_PLAN_CLOSE: self._close,
+            emc.EMC_TASK_PLAN_SET_OPTIONAL_STOP: self._set_optional_stop,
+            emc.EMC_TASK_PLAN_SET_BLOCK_DELETE: self._set_block_delete,
+            emc.EMC_TRAJ_SET_TELEOP_ENABLE: self._teleop,
+            emc.EMC_OPERATOR_ERROR: self._forward_operator_message,
+            emc.EMC_OPERATOR_TEXT: self._forward_operator_message,
+            emc.EMC_OPERATOR_DISPLAY: self._forward_operator_message,
+        }
+
+    # ================================================================ main loop
+    def start(self) -> None:
+        """Tell motion the machine's limits, then publish the first status."""
+        for msg in self.setup.motion_init_messages():
+            self._send_motion(msg)
+        self.refresh()
+        self.publish()
+
+    def cycle(self) -> None:
+        """One pass of the loop (waits at most CYCLE_TIME for a command)."""
+        cmd = self._next_command(self.setup.cycle_time)
+        self.refresh()
+        if cmd is not None:
+            self.handle(cmd)
+        self._watch_estop()
+        self._plan()
+        self._execute()
+        self._finish_runs()
+        self.publish()
+
+    def _next_command(self, timeout: float) -> emc.NMLmsg | None:
+        try:
+            return self.nml[EMC_COMMAND].blocking_read(timeout)
+        except NmlError as exc:
+            self.operator_error(f"bad command message: {exc}")
+            return None
+
+    # ================================================================ commands
+    def handle(self, cmd: emc.NMLmsg) -> None:
+        """Carry out one command and answer it (EXEC, then DONE or ERROR)."""
+        stat = self.stat
+        stat.command_type = cmd.TYPE
+        stat.echo_serial_number = cmd.serial_number
+        stat.status = RCS_STATUS.EXEC
+        handler = self.handlers.get(type(cmd), self._forward)
+        try:
+            outcome = handler(cmd)
+        except (InterpError, ValueError) as exc:
+            outcome = str(exc)
+        if outcome is True:  # still running: answered when it finishes
+            self.pending_serial = cmd.serial_number
+            return
+        if isinstance(outcome, str):
+            stat.status = RCS_STATUS.ERROR
+            self.operator_error(outcome)
+        else:
+            stat.status = RCS_STATUS.DONE
+        self.refresh()
+        self.publish()
+
+    def _forward(self, cmd: emc.NMLmsg) -> str | None:
+        """Manual commands: motion's and iocontrol's own, sent on when allowed."""
+        if _is_motion_message(cmd):
+            if isinstance(cmd, emc.EMC_JOG_CMD_MSG | emc.EMC_JOINT_HOME | emc.EMC_JOINT_UNHOME):
+                problem = self._require(state=STATE.ON, mode=MODE.MANUAL)
+                if problem:
+                    return problem
+            return self._send_motion(cmd, is_waiting=True)
+        if _is_io_message(cmd):
+            return self._send_io(cmd, is_waiting=True)
+        return f"task does not handle {cmd.NAME}"
+
+    def _require(self, state: STATE | None = None, mode: MODE | None = None) -> str | None:
+        if state is not None and self.state != state:
+            return f"machine must be {state.name.replace('_', ' ').lower()}, it is " + (
+                self.state.name.replace("_", " ").lower()
+            )
+        if mode is not None and self.mode != mode:
+            return f"must be in {mode.name} mode, not {self.mode.name}"
+        return None
+
+    # ---------------------------------------------------------------- state and mode
+    def _set_state(self, cmd: emc.EMC_TASK_SET_STATE) -> str | None:
+        target = cmd.state
+        if target == STATE.ESTOP:
+            self._abort()
+            self._send_motion(emc.EMC_TRAJ_DISABLE())
+            self._send_io(emc.EMC_AUX_ESTOP_ON(), is_waiting=True)
+            self.state = STATE.ESTOP
+        elif target == STATE.ESTOP_RESET:
+            problem = self._send_io(emc.EMC_AUX_ESTOP_RESET(), is_waiting=True)
+            problem = problem or self._send_io(emc.EMC_AUX_ESTOP_OFF(), is_waiting=True)
+            if problem:
+                return problem
+            if self.stat.io.aux.estop:
+                return "cannot reset E-stop: the E-stop chain (iocontrol.0.emc-enable-in) is open"
+            self._send_motion(emc.EMC_TRAJ_DISABLE())
+            self.state = STATE.ESTOP_RESET
+        elif target == STATE.ON:
+            if self.state == STATE.ESTOP:
+                return "cannot turn the machine on while in E-stop"
+            problem = self._send_motion(emc.EMC_TRAJ_ENABLE(), is_waiting=True)
+            if problem:
+                return problem
+            self.state = STATE.ON
+        elif target == STATE.OFF:
+            if self.state == STATE.ESTOP:
+                return "cannot turn the machine off while in E-stop (reset it first)"
+            self._abort()
+            self._send_motion(emc.EMC_TRAJ_DISABLE(), is_waiting=True)
+            self.state = STATE.OFF
+        else:
+            return f"unknown machine state {target}"
+        return None
+
+    def _set_mode(self, cmd: emc.EMC_TASK_SET_MODE) -> str | None:
+        mode = cmd.mode
+        if mode not in (MODE.MANUAL, MODE.AUTO, MODE.MDI):
+            return f"unknown mode {mode}"
+        if mode == self.mode:
+            return None
+        if self.run is Run.PROGRAM:
+            return "cannot change mode while a program runs (abort it first)"
+        if mode == MODE.MANUAL:
+            self._abort()
+            self._send_motion(
+                emc.EMC_TRAJ_SET_MODE(mode=emc.EMC_TRAJ_MODE_ENUM.FREE), is_waiting=True
+            )
+        self.mode = MODE(mode)
+        return None
+
+    def _teleop(self, cmd: emc.EMC_TRAJ_SET_TELEOP_ENABLE) -> str | None:
+        """Joint or world jogging in manual mode. Motion jogs joints (teleop is not there
+        yet), which on trivial kinematics are the axes; so both requests are accepted."""
+        return None
+
+    def _ensure_coordinated(self) -> str | None:
+        """Programs and MDI need coordinated mode, which needs homed joints (TASK-016)."""
+        traj = self.stat.motion.traj
+        if traj.mode == emc.EMC_TRAJ_MODE_ENUM.COORD:
+            return None
+        joints = self.stat.motion.joint
+        if self.setup.is_homing_forced and not all(
+            joints[i].homed for i in range(len(self.setup.joints))
+        ):
+            return "all joints must be homed first ([TRAJ]NO_FORCE_HOMING is not set)"
+        return self._send_motion(
+            emc.EMC_TRAJ_SET_MODE(mode=emc.EMC_TRAJ_MODE_ENUM.COORD), is_waiting=True
+        )
+
+    # ---------------------------------------------------------------- MDI and programs
+    def _mdi(self, cmd: emc.EMC_TASK_PLAN_EXECUTE) -> str | bool | None:
+        problem = self._require(state=STATE.ON, mode=MODE.MDI)
+        if problem:
+            return problem
+        if self.run is not Run.IDLE:
+            self.mdi_queue.append((cmd.serial_number, cmd.command))
+            return True
+        problem = self._ensure_coordinated()
+        if problem:
+            return problem
+        return self._start_mdi(cmd.command)
+
+    def _start_mdi(self, text: str) -> str | bool:
+        self.stat.task.command = text[:255]
+        self.canon.set_status(self.stat)
+        self.interp.synch()
+        self.checked_motion_serial = self.last_motion_serial
+        try:
+            status = self.interp.execute(text)
+            self.canon.FINISH()  # queue a move held back for naive-CAM joining (G64 Q)
+        except InterpError as exc:
+            self.queue.clear()
+            return str(exc)
+        self.run = Run.MDI
+        self.is_reading_done = status != INTERP_EXECUTE_FINISH and not self.interp.call_level
+        self.is_waiting_for_synch = status == INTERP_EXECUTE_FINISH
+        return True
+
+    def _open(self, cmd: emc.EMC_TASK_PLAN_OPEN) -> str | None:
+        if self.run is Run.PROGRAM:
+            return "cannot open a program while one runs"
+        self.interp.close()
+        self.interp.open(cmd.file)
+        self.file = cmd.file
+        return None
+
+    def _close(self, _cmd: emc.NMLmsg) -> str | None:
+        if self.run is Run.PROGRAM:
+            return "cannot close the program while it runs"
+        self.interp.close()
+        self.file = ""
+        return None
+
+    def _run_program(self, cmd: emc.EMC_TASK_PLAN_RUN) -> str | None:
+        problem = self._require(state=STATE.ON, mode=MODE.AUTO)
+        if problem:
+            return problem
+        if not self.file:
+            return "no program open (program_open first)"
+        if self.run is not Run.IDLE:
+            return "a program is already running"
+        problem = self._ensure_coordinated()
+        if problem:
+            return problem
+        if cmd.line > 1:
+            return "run from line is not supported yet; run from the start"
+        self.interp.close()
+        self.interp.open(self.file)
+        self.canon.set_status(self.stat)
+        self.interp.synch()
+        self.checked_motion_serial = self.last_motion_serial
+        self.run = Run.PROGRAM
+        self.is_paused = False
+        self.is_reading_done = False
+        self.is_waiting_for_synch = False
+        return None
+
+    def _pause(self, _cmd: emc.NMLmsg) -> str | None:
+        if self.run is Run.IDLE:
+            return "nothing is running to pause"
+        self.is_paused = True
+        return self._send_motion(emc.EMC_TRAJ_PAUSE())
+
+    def _resume(self, _cmd: emc.NMLmsg) -> str | None:
+        if not self.is_paused:
+            return None
+        self.is_paused = False
+        return self._send_motion(emc.EMC_TRAJ_RESUME())
+
+    def _step(self, _cmd: emc.NMLmsg) -> str | None:
+        if self.run is not Run.PROGRAM:
+            return "step needs a running program"
+        self.is_paused = True
+        return self._send_motion(emc.EMC_TRAJ_STEP())
+
+    def _plan_init(self, _cmd: emc.NMLmsg) -> str | None:
+        if self.run is not Run.IDLE:
+            return "cannot reset the interpreter while it runs"
+        self.interp.reset()
+        return None
+
+    def _synch(self, _cmd: emc.NMLmsg) -> None:
+        self.canon.set_status(self.stat)
+        self.interp.synch()
+
+    def _set_optional_stop(self, cmd: emc.NMLmsg) -> None:
+        self.is_optional_stop = bool(cmd.state)
+
+    def _set_block_delete(self, cmd: emc.NMLmsg) -> None:
+        self.is_block_delete = bool(cmd.state)
+        self.canon.SET_BLOCK_DELETE(self.is_block_delete)
+
+    def _forward_operator_message(self, cmd: emc.NMLmsg) -> str | None:
+        """A UI's error_msg/text_msg/display_msg goes to every UI (as LinuxCNC's task)."""
+        self._write_error_channel(cmd)
+        return None
+
+    def _abort_command(self, _cmd: emc.NMLmsg) -> None:
+        self._abort()
+        self.operator_text("task: aborted")  # an abort is always reported (TASK-019)
+
+    def _abort(self) -> None:
+        """Stop motion along the path, cancel tool changes, forget what was queued."""
+        self._send_motion(emc.EMC_TRAJ_ABORT())
+        if self.stat.io.status == RCS_STATUS.EXEC:
+            self._send_io(emc.EMC_TOOL_ABORT())
+        self.queue.clear()
+        self.mdi_queue.clear()
+        if self.run is not Run.IDLE:
+            self.interp.reset()
+        self.run = Run.IDLE
+        self.is_paused = False
+        self.is_reading_done = True
+        self.is_waiting_for_synch = False
+        self.delay_until = 0.0
+        self.pending_serial = 0
+
+    # ================================================================ planning
+    def _plan(self) -> None:
+        """Read ahead while a program or MDI command runs (TASK-006..010)."""
+        if self.run is Run.IDLE or self.is_reading_done or self.is_paused:
+            return
+        if self.is_waiting_for_synch:
+            if not self._is_everything_done():
+                return
+            self.canon.set_status(self.stat)
+            self.interp.synch()
+            self.is_waiting_for_synch = False
+        while len(self.queue) < READAHEAD and not self.is_reading_done:
+            try:
+                if self.run is Run.MDI:
+                    status = self.interp.execute(None) if self.interp.call_level else INTERP_EXIT
+                    if status != INTERP_EXECUTE_FINISH and not self.interp.call_level:
+                        self.is_reading_done = True
+                else:
+                    status = self.interp.read()
+                    if status == INTERP_ENDFILE:
+                        self.is_reading_done = True
+                        break
+                    status = self.interp.execute()
+                    if status == INTERP_EXIT:
+                        self.is_reading_done = True
+            except InterpError as exc:
+                self._program_error(str(exc))
+                return
+            if status == INTERP_EXECUTE_FINISH:
+                self.is_waiting_for_synch = True
+                return
+
+    def _program_error(self, text: str) -> None:
+        line = getattr(self.interp, "sequence_number", 0)
+        where = f" (line {line} of {self.file})" if self.run is Run.PROGRAM and self.file else ""
+        self.operator_error(f"{text}{where}")
+        self.stat.task.interpreter_errcode = 1
+        if self.pending_serial:
+            self.stat.echo_serial_number = self.pending_serial
+            self.stat.status = RCS_STATUS.ERROR
+        self._abort()
+
+    # ================================================================ execution
+    def _execute(self) -> None:
+        """Send queued messages in order, each when its preconditions hold."""
+        now = time.monotonic()
+        while self.queue and not self.is_paused:
+            if now < self.delay_until:
+                return
+            msg = self.queue[0]
+            if isinstance(msg, emc.EMC_TRAJ_DELAY):
+                if not self._is_motion_done():
+                    return
+                self.delay_until = now + msg.delay
+            elif isinstance(msg, emc.EMC_TASK_PLAN_PAUSE | emc.EMC_TASK_PLAN_OPTIONAL_STOP):
+                if not self._is_motion_done():
+                    return
+                if isinstance(msg, emc.EMC_TASK_PLAN_PAUSE) or self.is_optional_stop:
+                    self.is_paused = True
+            elif isinstance(msg, emc.EMC_TASK_PLAN_END):
+                if not self._is_everything_done():
+                    return
+                self.is_reading_done = True
+            elif isinstance(msg, emc.EMC_SYSTEM_CMD):
+                if not self._is_everything_done() or not self._start_system_command(msg):
+                    return
+            elif msg.KIND is MessageKind.OPERATOR:
+                self._write_error_channel(msg)
+            elif _is_motion_message(msg):
+                if self.stat.motion.traj.queueFull:
+                    return
+                if self._send_motion(msg):
+                    return
+            elif _is_io_message(msg):
+                if not self._is_everything_done():
+                    return
+                if self._send_io(msg):
+                    return
+            if self.queue:  # (an error above may have aborted the run and emptied it)
+                self.queue.popleft()
+
+    def _start_system_command(self, msg: emc.NMLmsg) -> bool:
+        """M100..M199: run the user's program and wait for it (TASK-011); True once it ran."""
+        if self.system_command is not None:
+            if self.system_command.poll() is None:
+                return False
+            status = self.system_command.returncode
+            self.system_command = None
+            if status != 0:
+                self._program_error(f"{msg.string.split()[0]} exited with status {status}")
+            return True
+        try:
+            self.system_command = subprocess.Popen(shlex.split(msg.string))
+        except OSError as exc:
+            self._program_error(f"cannot run {msg.string}: {exc}")
+            return True
+        return False
+
+    def _finish_runs(self) -> None:
+        """A run is over when nothing is left to read, queue or move."""
+        self._check_motion_errors()
+        if self.run is Run.IDLE or not self.is_reading_done or self.queue:
+            return
+        if not self._is_everything_done() or time.monotonic() < self.delay_until:
+            return
+        was_mdi = self.run is Run.MDI
+        self.run = Run.IDLE
+        if self.pending_serial:
+            self.stat.echo_serial_number = self.pending_serial
+            self.stat.status = RCS_STATUS.DONE
+            self.pending_serial = 0
+        if was_mdi and self.mdi_queue:
+            serial, text = self.mdi_queue.popleft()
+            self.stat.echo_serial_number = serial
+            outcome = self._start_mdi(text)
+            if outcome is True:
+                self.pending_serial = serial
+            else:
+                self.stat.status = RCS_STATUS.ERROR
+                self.operator_error(outcome)
+
+    def _check_motion_errors(self) -> None:
+        """A command motion refused during a run stops the run (motion said why)."""
+        motion = self.stat.motion
+        if (
+            motion.status == RCS_STATUS.ERROR
+            and motion.echo_serial_number > self.checked_motion_serial
+        ):
+            self.checked_motion_serial = motion.echo_serial_number
+            if self.run is not Run.IDLE:
+                self._program_error("motion refused a command")
+
+    def _is_motion_done(self) -> bool:
+        motion = self.stat.motion
+        return (
+            motion.echo_serial_number >= self.last_motion_serial
+            and motion.status != RCS_STATUS.EXEC
+            and motion.traj.inpos
+            and motion.traj.queue == 0
+        )
+
+    def _is_io_done(self) -> bool:
+        io = self.stat.io
+        return io.echo_serial_number >= self.last_io_serial and io.status != RCS_STATUS.EXEC
+
+    def _is_everything_done(self) -> bool:
+        return self._is_motion_done() and self._is_io_done()
+
+    # ================================================================ sending
+    def _send_motion(self, msg: emc.NMLmsg, is_waiting: bool = False) -> str | None:
+        try:
+            self.last_motion_serial = self.nml[MOTION_COMMAND].write(msg)
+        except NmlError as exc:
+            return f"cannot send {msg.NAME} to motion: {exc}"
+        return self._await(MOTION_STATUS, "motion", self.last_motion_serial) if is_waiting else None
+
+    def _send_io(self, msg: emc.NMLmsg, is_waiting: bool = False) -> str | None:
+        try:
+            self.last_io_serial = self.nml[TOOL_COMMAND].write(msg)
+        except NmlError as exc:
+            return f"cannot send {msg.NAME} to iocontrol: {exc}"
+        return self._await(TOOL_STATUS, "io", self.last_io_serial) if is_waiting else None
+
+    def _await(self, buffer: str, part: str, serial: int, timeout: float = 2.0) -> str | None:
+        """Wait until motion or iocontrol has answered command ``serial`` (not for moves:
+        only for the short commands task needs the result of)."""
+        channel = self.nml[buffer]
+        deadline = time.monotonic() + timeout
+        while True:
+            stat = channel.peek()
+            if (
+                stat is not None
+                and stat.echo_serial_number >= serial
+                and stat.status
+                in (
+                    RCS_STATUS.DONE,
+                    RCS_STATUS.ERROR,
+                )
+            ):
+                self.refresh()
+                if stat.echo_serial_number == serial and stat.status == RCS_STATUS.ERROR:
+                    return f"{part} refused the command"
+                return None
+            remaining = deadline - time.monotonic()
+            if remaining <= 0:
+                return f"{part} did not answer within {timeout:g} s (is it running?)"
+            channel.blocking_read(min(remaining, 0.05))
+
+    # ================================================================ status
+    def _watch_estop(self) -> None:
+        """The E-stop chain: iocontrol reports emc-enable-in dropped (IO-004)."""
+        if self.state != STATE.ESTOP and self.stat.io.aux.estop:
+            self._abort()
+            self._send_motion(emc.EMC_TRAJ_DISABLE())
+            self.state = STATE.ESTOP
+            self.operator_error("E-stop: the E-stop chain opened (iocontrol.0.emc-enable-in)")
+
+    def refresh(self) -> None:
+        """Take motion's and iocontrol's latest status into EMC_STAT."""
+        motion = self.nml[MOTION_STATUS].peek()
+        if motion is not None:
+            self.stat.motion = motion
+        io = self.nml[TOOL_STATUS].peek()
+        if io is not None:
+            self.stat.io = io
+
+    def publish(self) -> None:
+        task = self.stat.task
+        interp = self.interp
+        task.mode = self.mode
+        task.state = self.state
+        if self.run is Run.IDLE:
+            task.interpState = INTERP.IDLE
+        elif self.is_paused:
+            task.interpState = INTERP.PAUSED
+        elif self.is_reading_done or self.is_waiting_for_synch:
+            task.interpState = INTERP.WAITING
+        else:
+            task.interpState = INTERP.READING
+        task.execState = EXEC.DONE if self._is_everything_done() else EXEC.WAITING_FOR_MOTION
+        task.task_paused = self.is_paused
+        task.optional_stop_state = self.is_optional_stop
+        task.block_delete_state = self.is_block_delete
+        task.file = self.file[:255]
+        task.callLevel = interp.call_level
+        task.motionLine = self.stat.motion.traj.id
+        task.currentLine = self.stat.motion.traj.id
+        task.readLine = getattr(interp, "sequence_number", 0)
+        task.queuedMDIcommands = len(self.mdi_queue)
+        task.delayLeft = max(0.0, self.delay_until - time.monotonic())
+        codes = interp.active_g_codes()
+        task.activeGCodes[: len(codes)] = codes
+        codes = interp.active_m_codes()
+        task.activeMCodes[: len(codes)] = codes
+        settings = interp.active_settings()
+        task.activeSettings[: len(settings)] = settings
+        task.programUnits = interp.length_units if hasattr(interp, "length_units") else 0
+        params = interp.parameters
+        system = int(params[5220]) or 1
+        base = 5201 + 20 * system
+        _store(task.g5x_offset, params[base : base + 9])
+        task.g5x_index = system
+        _store(task.g92_offset, params[5211:5220])
+        _store(task.toolOffset, params[5401:5410])
+        task.ini_filename = self.ini.path[:255]
+        try:
+            self.nml[EMC_STATUS].write(self.stat)
+        except NmlError as exc:
+            log.error("cannot publish status: %s", exc)
+
+    # ================================================================ messages
+    def operator_error(self, text: str) -> None:
+        self._write_error_channel(emc.EMC_OPERATOR_ERROR(error=text[:255]))
+
+    def operator_text(self, text: str) -> None:
+        self._write_error_channel(emc.EMC_OPERATOR_TEXT(text=text[:255]))
+
+    def _write_error_channel(self, msg: emc.NMLmsg) -> None:
+        try:
+            self.nml[EMC_ERROR].write(msg)
+        except NmlError as exc:
+            log.error("cannot write to the error channel: %s", exc)
+
+    # ================================================================ shutdown
+    def shutdown(self) -> None:
+        """Save what must survive a restart: parameters, positions (atomically)."""
+        try:
+            self.interp.exit()
+        except InterpError as exc:
+            log.error("saving parameters failed: %s", exc)
+        if self.setup.position_file:
+            joints = self.stat.motion.joint
+            text = "".join(f"{joints[i].output:.6f}\n" for i in range(len(self.setup.joints)))
+            try:
+                atomic_write_text(self.setup.position_file, text)
+            except OSError as exc:
+                log.error("cannot write %s: %s", self.setup.position_file, exc)
+
+
+def _store(pose: emc.EmcPose, values: Sequence[float]) -> None:
+    pose.tran.x, pose.tran.y, pose.tran.z = values[0], values[1], values[2]
+    pose.a, pose.b, pose.c, pose.u, pose.v, pose.w = values[3:9]

@@ -1,0 +1,169 @@
+"""A whole machine through real processes: ``cnc run`` + the ``cnc`` API (TASK-*, IO-*).
+
+The launcher starts the realtime host with motion, iocontrol and task from
+tests/task/machine/mill.ini (copied to a scratch folder: the machine writes its parameter,
+position and tool files); the test drives it like a LinuxCNC script would.
+"""
+
+from __future__ import annotations
+
+import shutil
+import signal
+import subprocess
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+import cnc
+from nml.ipcnames import instance_objects
+
+MACHINE = Path(__file__).with_name("machine")
+
+
+class Machine:
+    def __init__(self, proc: subprocess.Popen[str], folder: Path) -> None:
+        self.proc = proc
+        self.folder = folder
+        self.stat = cnc.stat()
+        self.command = cnc.command()
+        self.errors = cnc.error_channel()
+
+    def wait_ready(self, timeout: float = 30) -> None:
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            assert self.proc.poll() is None, self.proc.stderr.read()
+            try:
+                self.stat.poll()
+                return
+            except cnc.error:
+                time.sleep(0.05)
+        raise AssertionError("the machine did not come up")
+
+    def until(self, condition, timeout: float = 20) -> None:
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            self.stat.poll()
+            if condition(self.stat):
+                return
+            time.sleep(0.01)
+        raise AssertionError(f"condition not reached; task_state {self.stat.task_state}")
+
+    def messages(self, wait: float = 0.5) -> list[tuple[int, str]]:
+        found = []
+        deadline = time.monotonic() + wait
+        while time.monotonic() < deadline:
+            message = self.errors.poll()
+            if message is None:
+                time.sleep(0.01)
+                continue
+            found.append(message)
+        return found
+
+    def ready_to_move(self) -> None:
+        c = self.command
+        c.state(cnc.STATE_ESTOP_RESET)
+        assert c.wait_complete() == cnc.RCS_DONE
+        c.state(cnc.STATE_ON)
+        assert c.wait_complete() == cnc.RCS_DONE
+        c.mode(cnc.MODE_MANUAL)
+        c.wait_complete()
+        c.home(-1)
+        c.wait_complete()
+        self.until(lambda s: all(s.homed[:3]) and s.inpos)
+        c.mode(cnc.MODE_MDI)
+        assert c.wait_complete() == cnc.RCS_DONE
+
+
+@pytest.fixture
+def machine(procs, tmp_path: Path) -> Iterator[Machine]:
+    folder = tmp_path / "machine"
+    shutil.copytree(MACHINE, folder)
+    proc = procs.python("-m", "cnc", "run", "--headless", "mill.ini", cwd=folder)
+    machine = Machine(proc, folder)
+    try:
+        machine.wait_ready()
+        yield machine
+    finally:
+        proc.send_signal(signal.SIGTERM)
+        try:
+            proc.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+
+
+def test_estop_reset_on_home_and_mdi_move(machine: Machine) -> None:
+    s = machine.stat
+    s.poll()
+    assert s.task_state == cnc.STATE_ESTOP
+    machine.ready_to_move()
+    c = machine.command
+    c.mdi("G0 X10 Y-5")
+    assert c.wait_complete(10) == cnc.RCS_DONE
+    s.poll()
+    assert s.position[:3] == pytest.approx((10.0, -5.0, 10.0))  # Z homed to HOME = 10
+    assert s.task_mode == cnc.MODE_MDI and s.interp_state == cnc.INTERP_IDLE
+
+
+def test_bad_mdi_line_is_an_error_with_the_interpreters_text(machine: Machine) -> None:
+    machine.ready_to_move()
+    machine.messages(0.1)
+    c = machine.command
+    c.mdi("G999")
+    assert c.wait_complete(5) == cnc.RCS_ERROR
+    assert (cnc.OPERATOR_ERROR, "G-code out of range") in machine.messages()
+    c.mdi("G1 X1 F0")
+    assert c.wait_complete(5) == cnc.RCS_ERROR
+    assert (cnc.OPERATOR_ERROR, "Cannot do g1 with zero feed rate") in machine.messages()
+
+
+def test_commands_in_the_wrong_state_or_mode_are_refused(machine: Machine) -> None:
+    c = machine.command
+    c.mode(cnc.MODE_MDI)
+    c.wait_complete()
+    c.mdi("G0 X1")
+    assert c.wait_complete(5) == cnc.RCS_ERROR  # still in E-stop
+    assert any("machine must be on" in text for _, text in machine.messages())
+
+
+def test_program_with_a_loop_and_a_tool_change_runs_to_the_end(machine: Machine) -> None:
+    program = machine.folder / "part.ngc"
+    program.write_text(
+        "G21 G90 G17\n"
+        "T1 M6\n"
+        "G0 X0 Y0 Z5\n"
+        "#1 = 0\n"
+        "o100 while [#1 LT 3]\n"
+        "  G1 X[10 * [#1 + 1]] F600\n"
+        "  #1 = [#1 + 1]\n"
+        "o100 endwhile\n"
+        "M8\n"
+        "G0 Z8\n"
+        "M9\n"
+        "M2\n"
+    )
+    machine.ready_to_move()
+    c = machine.command
+    c.mode(cnc.MODE_AUTO)
+    assert c.wait_complete() == cnc.RCS_DONE
+    c.program_open(str(program))
+    assert c.wait_complete() == cnc.RCS_DONE
+    c.auto(cnc.AUTO_RUN, 0)
+    machine.until(lambda s: s.interp_state != cnc.INTERP_IDLE, timeout=5)
+    machine.until(lambda s: s.interp_state == cnc.INTERP_IDLE and s.inpos, timeout=30)
+    s = machine.stat
+    assert s.position[:3] == pytest.approx((30.0, 0.0, 8.0))
+    assert s.tool_in_spindle == 1
+
+
+def test_sigterm_stops_everything_and_leaves_nothing(procs, tmp_path: Path, cnc_instance) -> None:
+    folder = tmp_path / "machine"
+    shutil.copytree(MACHINE, folder)
+    proc = procs.python("-m", "cnc", "run", "--headless", "mill.ini", cwd=folder)
+    machine = Machine(proc, folder)
+    machine.wait_ready()
+    proc.send_signal(signal.SIGTERM)
+    assert proc.wait(timeout=30) == 0
+    assert instance_objects(cnc_instance) == []
+    assert (folder / "position.txt").exists()
