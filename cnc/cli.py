@@ -18,6 +18,8 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "halrun": ("hal.halrun:main", "start a realtime host, run a HAL file, tear down"),
     "hal": ("hal.tools:main", "HAL tools (watch|sample|stream)"),
     "run": ("cnc.launcher:main", "start a machine from an INI file, like linuxcnc"),
+    "top": ("cnc.ui.top:main", "live status view of the running machine, like linuxcnctop"),
+    "sh": ("cnc.ui.sh:main", "command shell and script runner, like linuxcncrsh"),
 }
 
 
