@@ -20,7 +20,9 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-from motion.free import FreePlanner, JogLimitError
+from motion.free import JogLimitError
+from motion.homing import Homing, HomingConfig, HomingError
+from motion.joint import Joint
 from motion.kinematics import Kinematics, KinematicsError
 from motion.pose import AXIS_LETTERS, NUM_AXES, EmcPose
 from motion.tp import TermCond, TrajectoryPlanner
@@ -39,46 +41,7 @@ _TERM_CONDS = {
 }
 DEFAULT_JOINT_VEL = 1.0
 DEFAULT_JOINT_ACC = 1.0
-
-
-@dataclass
-class Joint:
-    """One joint's configuration and state (ARCH-022: all of a joint in one record)."""
-
-    index: int
-    min_limit: float = -math.inf
-    max_limit: float = math.inf
-    max_vel: float = DEFAULT_JOINT_VEL
-    max_acc: float = DEFAULT_JOINT_ACC
-    max_ferror: float = 1.0
-    min_ferror: float = 1.0
-    home: float = 0.0
-    home_offset: float = 0.0
-    home_search_vel: float = 0.0
-    backlash: float = 0.0
-    pos_cmd: float = 0.0
-    pos_fb: float = 0.0
-    motor_offset: float = 0.0
-    vel_cmd: float = 0.0
-    ferror: float = 0.0
-    ferror_high_mark: float = 0.0
-    is_homed: bool = False
-    is_homing: bool = False
-    is_active: bool = True
-    is_faulted: bool = False
-    is_on_pos_limit: bool = False
-    is_on_neg_limit: bool = False
-    planner: FreePlanner = field(init=False)
-
-    def __post_init__(self) -> None:
-        self.planner = FreePlanner(self.max_vel, self.max_acc)
-
-    def apply_limits(self) -> None:
-        self.planner.set_limits(self.max_vel, self.max_acc, self.min_limit, self.max_limit)
-
-    @property
-    def is_in_position(self) -> bool:
-        return not self.planner.is_active
+NO_HOME_SEQUENCE = 999  # what task sends for a joint without HOME_SEQUENCE (as LinuxCNC)
 
 
 @dataclass
@@ -98,6 +61,8 @@ class Inputs:
     pos_limit: list[bool]
     neg_limit: list[bool]
     amp_fault: list[bool]
+    home_switch: list[bool] = field(default_factory=list)
+    index_enable: list[bool] = field(default_factory=list)  # cleared by the encoder at index
     probe: bool = False
     enable: bool = True  # motion.enable
     digital_in: list[bool] = field(default_factory=list)
@@ -123,7 +88,10 @@ class MotionController:
             )
         self.kins = kinematics
         self.period_s = period_s
-        self.joints = [Joint(i) for i in range(num_joints)]
+        self.joints = [Joint(DEFAULT_JOINT_VEL, DEFAULT_JOINT_ACC) for _ in range(num_joints)]
+        self.is_faulted = [False] * num_joints
+        self.homing_configs = [HomingConfig() for _ in range(num_joints)]
+        self.homing = Homing(self.joints, self.homing_configs)
         self.spindles = [Spindle() for _ in range(num_spindles)]
         self.digital_out = [False] * num_dio
         self.analog_out = [0.0] * num_aio
@@ -169,9 +137,9 @@ class MotionController:
 
     def _enable(self, _cmd: emc.NMLmsg) -> None:
         self.is_enabled = True
+        self.is_faulted = [False] * len(self.joints)
         for joint in self.joints:
-            joint.is_faulted = False
-            joint.planner.reset(joint.pos_cmd)
+            joint.hold_position()
         return None
 
     def _disable(self, _cmd: emc.NMLmsg | None = None) -> None:
@@ -186,16 +154,16 @@ class MotionController:
         self._disable()
 
     def _stop_everything_now(self) -> None:
+        self.homing.abort()
         for joint in self.joints:
             joint.planner.reset(joint.pos_cmd)
-            joint.is_homing = False
         self.tp.set_position(list(self.carte_pos_cmd))
 
     def _abort(self, _cmd: emc.NMLmsg) -> None:
         """ABORT: always accepted, idempotent; decelerates, then empties the queue (MOT-022)."""
+        self.homing.abort()
         for joint in self.joints:
             joint.planner.stop()
-            joint.is_homing = False
         self.tp.abort()
         return None
 
@@ -207,7 +175,7 @@ class MotionController:
             return f"unknown trajectory mode {mode}"
         if self._is_moving():
             return "cannot change mode while moving"
-        if mode in (COORD, TELEOP) and not all(j.is_homed for j in self.joints if j.is_active):
+        if mode in (COORD, TELEOP) and not all(j.is_homed for j in self.joints):
             return "all joints must be homed before going into coordinated mode"
         if mode == TELEOP:
             return "teleop mode is not supported yet"
@@ -220,7 +188,11 @@ class MotionController:
         return None
 
     def _is_moving(self) -> bool:
-        return not self.tp.is_done or any(j.planner.is_active for j in self.joints)
+        return (
+            not self.tp.is_done
+            or self.homing.is_homing
+            or any(j.planner.is_active for j in self.joints)
+        )
 
     # ---------------------------------------------------------------- jogs (free mode)
     def _jog(self, cmd: emc.NMLmsg) -> str | None:
@@ -230,7 +202,10 @@ class MotionController:
             return "jogging a joint needs free (joint) mode"
         if not self.is_enabled:
             return "cannot jog with motion disabled"
-        joint = self._joint(cmd.joint_or_axis)
+        index = cmd.joint_or_axis
+        joint = self._joint(index)
+        if self.homing.is_homing:
+            return "cannot jog while homing"
         override = self.is_override_limits or not joint.is_homed
         try:
             if isinstance(cmd, emc.EMC_JOG_STOP):
@@ -243,7 +218,7 @@ class MotionController:
             else:
                 joint.planner.jog_abs(cmd.pos, abs(cmd.vel), override)
         except JogLimitError as exc:
-            return f"joint {joint.index}: {exc}"
+            return f"joint {index}: {exc}"
         return None
 
     # ---------------------------------------------------------------- coordinated moves
@@ -269,14 +244,16 @@ class MotionController:
                 problems.append(f"{what} on line {line} would exceed {letter}'s positive limit")
             elif value < self.axis_min_limit[index]:
                 problems.append(f"{what} on line {line} would exceed {letter}'s negative limit")
-        for joint, target in zip(self.joints, self.kins.inverse(end), strict=False):
+        for index, (joint, target) in enumerate(
+            zip(self.joints, self.kins.inverse(end), strict=False)
+        ):
             if target > joint.max_limit:
                 problems.append(
-                    f"{what} on line {line} would exceed joint {joint.index}'s positive limit"
+                    f"{what} on line {line} would exceed joint {index}'s positive limit"
                 )
             elif target < joint.min_limit:
                 problems.append(
-                    f"{what} on line {line} would exceed joint {joint.index}'s negative limit"
+                    f"{what} on line {line} would exceed joint {index}'s negative limit"
                 )
         return "\n".join(problems) or None
 
@@ -424,57 +401,75 @@ class MotionController:
     # ---------------------------------------------------------------- joints
     def _joint_limits(self, cmd: emc.NMLmsg) -> str | None:
         joint = self._joint(cmd.joint)
+        planner = joint.planner
+        max_vel, max_acc = planner.max_vel, planner.max_acc
+        min_limit, max_limit = planner.min_limit, planner.max_limit
         if isinstance(cmd, emc.EMC_JOINT_SET_MIN_POSITION_LIMIT):
-            joint.min_limit = cmd.limit
+            min_limit = cmd.limit
         elif isinstance(cmd, emc.EMC_JOINT_SET_MAX_POSITION_LIMIT):
-            joint.max_limit = cmd.limit
+            max_limit = cmd.limit
         elif isinstance(cmd, emc.EMC_JOINT_SET_MAX_VELOCITY):
-            joint.max_vel = cmd.vel
-        elif isinstance(cmd, emc.EMC_JOINT_SET_FERROR):
-            joint.max_ferror = cmd.ferror
-        elif isinstance(cmd, emc.EMC_JOINT_SET_MIN_FERROR):
-            joint.min_ferror = cmd.ferror
-        elif isinstance(cmd, emc.EMC_JOINT_SET_BACKLASH):
-            joint.backlash = cmd.backlash
+            max_vel = cmd.vel
         elif isinstance(cmd, emc.EMC_JOINT_SET_MAX_ACCELERATION):
-            joint.max_acc = cmd.acc
-        joint.apply_limits()
+            max_acc = cmd.acc
+        elif isinstance(cmd, emc.EMC_JOINT_SET_FERROR):
+            joint.set_ferror(cmd.ferror, joint.min_ferror_limit)
+        elif isinstance(cmd, emc.EMC_JOINT_SET_MIN_FERROR):
+            joint.set_ferror(joint.ferror_limit, cmd.ferror)
+        elif isinstance(cmd, emc.EMC_JOINT_SET_BACKLASH):
+            if cmd.backlash < 0:
+                return f"backlash must be >= 0, got {cmd.backlash}"
+            joint.backlash = cmd.backlash
+        planner.set_limits(max_vel, max_acc, min_limit, max_limit)
         return None
 
-    def _homing_params(self, cmd: emc.EMC_JOINT_SET_HOMING_PARAMS) -> None:
-        joint = self._joint(cmd.joint)
-        joint.home, joint.home_offset = cmd.home, cmd.offset
-        joint.home_search_vel = cmd.search_vel
+    def _homing_params(self, cmd: emc.EMC_JOINT_SET_HOMING_PARAMS) -> str | None:
+        """[JOINT_n] homing keys, sent by task at start-up (MOT-043)."""
+        index = cmd.joint
+        self._joint(index)
+        if self.homing.is_homing:
+            return "cannot change homing parameters while homing"
+        sequence = None if cmd.home_sequence == NO_HOME_SEQUENCE else cmd.home_sequence
+        self.homing_configs[index] = HomingConfig(
+            home=cmd.home,
+            home_offset=cmd.offset,
+            search_vel=cmd.search_vel,
+            latch_vel=cmd.latch_vel,
+            final_vel=cmd.home_final_vel,
+            use_index=bool(cmd.use_index),
+            ignore_limits=bool(cmd.ignore_limits),
+            is_shared=bool(cmd.is_shared),
+            sequence=sequence,
+            absolute_encoder=cmd.absolute_encoder,
+            volatile_home=bool(cmd.volatile_home),
+            locking_indexer=bool(cmd.locking_indexer),
+        )
+        self.homing = Homing(self.joints, self.homing_configs)
         return None
 
     def _home(self, cmd: emc.EMC_JOINT_HOME) -> str | None:
-        """Home a joint (-1: all). Without a search velocity the joint is homed where it
-        stands, which becomes HOME_OFFSET, then it moves to HOME (as LinuxCNC does)."""
+        """Home one joint, or all (-1) sequence by sequence (MOT-043, homing module)."""
         if self.mode != FREE:
             return "homing needs free (joint) mode"
         if not self.is_enabled:
             return "cannot home with motion disabled"
-        targets = self.joints if cmd.joint == -1 else [self._joint(cmd.joint)]
-        for joint in targets:
-            if joint.home_search_vel != 0:
-                return (
-                    f"joint {joint.index}: homing with a switch search (HOME_SEARCH_VEL) needs "
-                    "the homing module, not integrated yet"
-                )
-        for joint in targets:
-            joint.motor_offset += joint.pos_cmd - joint.home_offset
-            joint.pos_cmd = joint.pos_fb = joint.home_offset
-            joint.planner.reset(joint.home_offset)
-            joint.is_homed = True
-            joint.planner.move_to(joint.home, joint.max_vel)
+        try:
+            if cmd.joint == -1:
+                self.homing.home_all()
+            else:
+                self._joint(cmd.joint)
+                self.homing.home_joint(cmd.joint)
+        except HomingError as exc:
+            return str(exc)
         return None
 
     def _unhome(self, cmd: emc.EMC_JOINT_UNHOME) -> str | None:
         if self._is_moving():
             return "cannot unhome while moving"
-        targets = self.joints if cmd.joint == -1 else [self._joint(cmd.joint)]
-        for joint in targets:
-            joint.is_homed = False
+        try:
+            self.homing.unhome(cmd.joint)
+        except HomingError as exc:
+            return str(exc)
         return None
 
     def _override_limits(self, cmd: emc.EMC_JOINT_OVERRIDE_LIMITS) -> None:
@@ -524,9 +519,16 @@ class MotionController:
 
     # ================================================================ servo period
     def update(self, inputs: Inputs) -> None:
-        """One servo period: feedback, checks, planning, kinematics (MOT-001..007, 016)."""
-        for joint, motor_fb in zip(self.joints, inputs.motor_pos_fb, strict=False):
-            joint.pos_fb = motor_fb - joint.motor_offset
+        """One servo period: feedback, checks, homing, planning, kinematics (MOT-001..016)."""
+        dt = self.period_s
+        for index, joint in enumerate(self.joints):
+            joint.update_feedback(inputs.motor_pos_fb[index])
+            joint.is_on_pos_limit = bool(inputs.pos_limit[index])
+            joint.is_on_neg_limit = bool(inputs.neg_limit[index])
+            if inputs.home_switch:
+                joint.is_home_switch_on = bool(inputs.home_switch[index])
+            if inputs.index_enable and joint.is_index_enabled:
+                joint.is_index_enabled = bool(inputs.index_enable[index])
         self.digital_in = list(inputs.digital_in) or self.digital_in
         self.analog_in = list(inputs.analog_in) or self.analog_in
         if self.is_enabled and not inputs.enable:
@@ -538,13 +540,17 @@ class MotionController:
             error = self.tp.take_error()
             if error:
                 self.errors.append(error)
-            pose = EmcPose(*position.tolist())
-            self._set_joints_from_pose(pose)
+            self._set_joints_from_pose(EmcPose(*position.tolist()))
         else:
+            self.homing.step(dt)
+            error = self.homing.take_error()
+            if error:
+                self.errors.append(error)
             for joint in self.joints:
-                before = joint.pos_cmd
-                joint.pos_cmd = joint.planner.step(self.period_s)
-                joint.vel_cmd = (joint.pos_cmd - before) / self.period_s
+                joint.pos_cmd = joint.planner.step(dt)
+        for joint in self.joints:
+            joint.update_command(dt)
+        if self.mode != COORD:
             self.carte_pos_cmd = self._forward([j.pos_cmd for j in self.joints])
         self.carte_pos_fb = self._forward([j.pos_fb for j in self.joints])
         self._check_following_error()
@@ -556,7 +562,6 @@ class MotionController:
             self._fault(f"inverse kinematics failed: {exc}; motion stopped")
             return
         for joint, target in zip(self.joints, targets, strict=False):
-            joint.vel_cmd = (target - joint.pos_cmd) / self.period_s
             joint.pos_cmd = target
         self.carte_pos_cmd = pose
 
@@ -567,33 +572,25 @@ class MotionController:
             return self.carte_pos_cmd  # a singularity: keep the last pose (KIN-012)
 
     def _check_hard_limits_and_faults(self, inputs: Inputs) -> None:
-        for joint in self.joints:
-            index = joint.index
-            joint.is_on_pos_limit = bool(inputs.pos_limit[index])
-            joint.is_on_neg_limit = bool(inputs.neg_limit[index])
-            if not self.is_enabled:
-                continue
-            if inputs.amp_fault[index] and not joint.is_faulted:
-                joint.is_faulted = True
+        if not self.is_enabled:
+            return
+        for index, joint in enumerate(self.joints):
+            if inputs.amp_fault[index] and not self.is_faulted[index]:
+                self.is_faulted[index] = True
                 self._fault(f"joint {index} amplifier fault")
-            elif (joint.is_on_pos_limit or joint.is_on_neg_limit) and not (
-                self.is_override_limits or joint.is_homing
-            ):
+                return
+            if joint.is_on_limit_switch() and not (self.is_override_limits or joint.is_homing):
                 side = "positive" if joint.is_on_pos_limit else "negative"
                 self._fault(f"joint {index} on limit switch error ({side})")
+                return
 
     def _check_following_error(self) -> None:
-        """MIN_FERROR at rest rising linearly to FERROR at max velocity (MOT-015)."""
-        for joint in self.joints:
-            joint.ferror = joint.pos_cmd - joint.pos_fb
-            magnitude = abs(joint.ferror)
-            joint.ferror_high_mark = max(joint.ferror_high_mark, magnitude)
-            if not self.is_enabled:
-                continue
-            fraction = min(abs(joint.vel_cmd) / joint.max_vel, 1.0) if joint.max_vel else 1.0
-            limit = joint.min_ferror + (joint.max_ferror - joint.min_ferror) * fraction
-            if magnitude > max(limit, joint.min_ferror):
-                self._fault(f"joint {joint.index} following error")
+        """MIN_FERROR at rest rising to FERROR at max velocity (MOT-074)."""
+        if not self.is_enabled:
+            return
+        for index, joint in enumerate(self.joints):
+            if joint.is_following_error():
+                self._fault(f"joint {index} following error")
                 return
 
     # ================================================================ status
@@ -628,16 +625,17 @@ class MotionController:
         traj.kinematics_type = int(self.kins.kinematics_type())
         traj.distance_to_go = self.tp.distance_to_go if self.mode == COORD else 0.0
         traj.current_vel = self.tp.vel if self.mode == COORD else 0.0
-        for joint, out in zip(self.joints, stat.joint, strict=False):
+        for index, (joint, out) in enumerate(zip(self.joints, stat.joint, strict=False)):
             out.minPositionLimit = _finite_or_zero(joint.min_limit)
             out.maxPositionLimit = _finite_or_zero(joint.max_limit)
-            out.maxFerror, out.minFerror = joint.max_ferror, joint.min_ferror
+            out.maxFerror = _finite_or_zero(joint.ferror_limit)
+            out.minFerror = _finite_or_zero(joint.min_ferror_limit)
             out.ferrorCurrent, out.ferrorHighMark = joint.ferror, joint.ferror_high_mark
             out.output, out.input = joint.pos_cmd, joint.pos_fb
             out.velocity = joint.vel_cmd
-            out.inpos = joint.is_in_position
+            out.inpos = not joint.planner.is_active
             out.homing, out.homed = joint.is_homing, joint.is_homed
-            out.fault = joint.is_faulted
+            out.fault = self.is_faulted[index]
             out.enabled = self.is_enabled
             out.maxHardLimit, out.minHardLimit = joint.is_on_pos_limit, joint.is_on_neg_limit
             out.overrideLimits = self.is_override_limits

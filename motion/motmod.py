@@ -130,11 +130,14 @@ class Motmod:
             raise HalError(f"motmod: cannot connect to the NML buffers: {exc}") from None
         self.status = emc.EMC_MOTION_STAT()
         self.pending_errors: list[str] = []
+        count = len(self.joints)
         self.inputs = Inputs(
-            motor_pos_fb=[0.0] * len(self.joints),
-            pos_limit=[False] * len(self.joints),
-            neg_limit=[False] * len(self.joints),
-            amp_fault=[False] * len(self.joints),
+            motor_pos_fb=[0.0] * count,
+            pos_limit=[False] * count,
+            neg_limit=[False] * count,
+            amp_fault=[False] * count,
+            home_switch=[False] * count,
+            index_enable=[False] * count,
         )
         host.add_function(comp, "motion-command-handler", self.command_handler)
         host.add_function(comp, "motion-controller", self.controller_period)
@@ -173,6 +176,8 @@ class Motmod:
             inputs.pos_limit[index] = pins.pos_lim_sw_in
             inputs.neg_limit[index] = pins.neg_lim_sw_in
             inputs.amp_fault[index] = pins.amp_fault_in
+            inputs.home_switch[index] = pins.home_sw_in
+            inputs.index_enable[index] = pins.index_enable
         motion_pins = self.motion
         inputs.probe = motion_pins.probe_input
         inputs.enable = motion_pins.enable
@@ -190,7 +195,7 @@ class Motmod:
         controller = self.controller
         for joint, pins in zip(controller.joints, self.joints, strict=True):
             pins.pos_cmd = joint.pos_cmd
-            pins.motor_pos_cmd = joint.pos_cmd + joint.motor_offset
+            pins.motor_pos_cmd = joint.motor_pos_cmd
             pins.motor_offset = joint.motor_offset
             pins.pos_fb = joint.pos_fb
             pins.vel_cmd = joint.vel_cmd
@@ -198,7 +203,8 @@ class Motmod:
             pins.amp_enable_out = controller.is_enabled
             pins.homed = joint.is_homed
             pins.homing = joint.is_homing
-            pins.in_position = joint.is_in_position
+            pins.in_position = not joint.planner.is_active
+            pins.index_enable = joint.is_index_enabled
         pose = list(controller.carte_pos_cmd)
         for index, pins in self.axes.items():
             pins.pos_cmd = pose[index]

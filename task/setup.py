@@ -32,7 +32,7 @@ class JointSetup:
     home_search_vel: float = 0.0
     home_latch_vel: float = 0.0
     home_final_vel: float = -1.0
-    home_sequence: int = -1
+    home_sequence: int = 999  # LinuxCNC's "no HOME_SEQUENCE": not homed by home-all
     home_use_index: bool = False
     home_ignore_limits: bool = False
     home_is_shared: bool = False
@@ -146,7 +146,7 @@ def load_setup(ini: IniFile) -> MachineSetup:
                 home_search_vel=ini.get_float(section, "HOME_SEARCH_VEL", 0.0),
                 home_latch_vel=ini.get_float(section, "HOME_LATCH_VEL", 0.0),
                 home_final_vel=ini.get_float(section, "HOME_FINAL_VEL", -1.0),
-                home_sequence=ini.get_int(section, "HOME_SEQUENCE", -1),
+                home_sequence=ini.get_int(section, "HOME_SEQUENCE", 999),
                 home_use_index=ini.get_bool(section, "HOME_USE_INDEX", False),
                 home_ignore_limits=ini.get_bool(section, "HOME_IGNORE_LIMITS", False),
                 home_is_shared=ini.get_bool(section, "HOME_IS_SHARED", False),

@@ -30,6 +30,7 @@ def make(num_joints: int = 3) -> MotionController:
             emc.EMC_AXIS_SET_MAX_ACCELERATION(axis=joint, acc=500.0),
             emc.EMC_AXIS_SET_MIN_POSITION_LIMIT(axis=joint, limit=-100.0),
             emc.EMC_AXIS_SET_MAX_POSITION_LIMIT(axis=joint, limit=100.0),
+            emc.EMC_JOINT_SET_HOMING_PARAMS(joint=joint, home_sequence=0),
         ):
             assert motion.handle(cmd) is None
     return motion
@@ -46,7 +47,11 @@ def enabled_homed(mode=COORD) -> MotionController:
     motion = make()
     assert motion.handle(emc.EMC_TRAJ_ENABLE()) is None
     assert motion.handle(emc.EMC_JOINT_HOME(joint=-1)) is None
-    run(motion, 10)
+    for _ in range(10_000):  # homing moves the joints to HOME, then it is done
+        run(motion, 1)
+        if not motion.homing.is_homing and motion.is_in_position:
+            break
+    assert all(j.is_homed for j in motion.joints)
     if mode == COORD:
         assert motion.handle(emc.EMC_TRAJ_SET_MODE(mode=COORD)) is None
     return motion
@@ -95,8 +100,9 @@ def test_coordinated_mode_needs_all_joints_homed() -> None:
 def test_homing_without_switches_sets_home_offset_then_moves_home() -> None:
     motion = make()
     motion.handle(emc.EMC_TRAJ_ENABLE())
-    motion.joints[0].pos_cmd = 7.0  # wherever the machine happens to stand
-    params = emc.EMC_JOINT_SET_HOMING_PARAMS(joint=0, home=1.0, offset=0.5)
+    motion.joints[0].shift(7.0)  # wherever the machine happens to stand
+    motion.joints[0].motor_offset = 0.0
+    params = emc.EMC_JOINT_SET_HOMING_PARAMS(joint=0, home=1.0, offset=0.5, home_sequence=0)
     assert motion.handle(params) is None
     assert motion.handle(emc.EMC_JOINT_HOME(joint=0)) is None
     run(motion, 500)

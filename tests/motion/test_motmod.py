@@ -101,6 +101,7 @@ def configure(task: Task) -> None:
             emc.EMC_AXIS_SET_MAX_ACCELERATION(axis=joint, acc=500.0),
             emc.EMC_AXIS_SET_MIN_POSITION_LIMIT(axis=joint, limit=-50.0),
             emc.EMC_AXIS_SET_MAX_POSITION_LIMIT(axis=joint, limit=50.0),
+            emc.EMC_JOINT_SET_HOMING_PARAMS(joint=joint, home_sequence=0),
         ):
             assert task.send(cmd).status == RCS_STATUS.DONE
 
