@@ -20,6 +20,8 @@ def atomic_write_text(
     ``.var.bak`` this way).
     """
     target = Path(path)
+    if _has_content(target, text):
+        return  # nothing changed: no write, no fsync (the interpreter saves at every synch)
     directory = target.parent if str(target.parent) else Path(".")
     fd, tmp_name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=directory)
     try:
@@ -38,6 +40,13 @@ def atomic_write_text(
             os.unlink(tmp_name)
         raise
     _fsync_directory(directory)
+
+
+def _has_content(target: Path, text: str) -> bool:
+    try:
+        return target.read_text(encoding="utf-8") == text
+    except (OSError, UnicodeDecodeError):
+        return False
 
 
 def _copy_for_backup(source: Path, backup: Path) -> None:

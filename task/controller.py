@@ -49,6 +49,7 @@ STATE = emc.EMC_TASK_STATE_ENUM
 EXEC = emc.EMC_TASK_EXEC_ENUM
 INTERP = emc.EMC_TASK_INTERP_ENUM
 READAHEAD = 50  # messages queued ahead of motion while reading a program
+BUSY_POLL_S = 0.001  # how often task looks at motion while a program or MDI runs
 
 
 class Run(enum.Enum):
@@ -143,8 +144,10 @@ class Task:
         self.publish()
 
     def cycle(self) -> None:
-        """One pass of the loop (waits at most CYCLE_TIME for a command)."""
-        cmd = self._next_command(self.setup.cycle_time)
+        """One pass of the loop: waits for a command at most CYCLE_TIME, or one servo
+        period while something runs, so completions are seen (and answered) at once."""
+        timeout = self.setup.cycle_time if self.run is Run.IDLE else BUSY_POLL_S
+        cmd = self._next_command(timeout)
         self.refresh()
         if cmd is not None:
             self.handle(cmd)
