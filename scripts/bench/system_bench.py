@@ -36,7 +36,7 @@ def percentile(values: list[float], fraction: float) -> float:
     return ordered[min(len(ordered) - 1, int(fraction * len(ordered)))]
 
 
-def wait_for(s, condition, timeout: float) -> bool:  # noqa: ANN001
+def wait_for(s, condition, timeout: float) -> bool:
     deadline = time.perf_counter() + timeout
     while time.perf_counter() < deadline:
         s.poll()
@@ -46,7 +46,7 @@ def wait_for(s, condition, timeout: float) -> bool:  # noqa: ANN001
     return False
 
 
-def measure(api, program_path: str) -> dict[str, float]:  # noqa: ANN001 - cnc or linuxcnc
+def measure(api, program_path: str) -> dict[str, float]:
     """The figures of a running machine, through the LinuxCNC-style Python API."""
     s, c = api.stat(), api.command()
     s.poll()
