@@ -409,9 +409,9 @@ def _set(shell: Shell, text: str) -> None:
 # ------------------------------------------------------------------ waiting, looking
 @command(
     "wait [TIMEOUT]",
-    "wait until the program has ended",
-    "Wait until the last command has finished and the interpreter is idle, at most "
-    "TIMEOUT seconds (default: no limit).",
+    "wait until the machine is idle",
+    "Wait until the last command has finished, the interpreter is idle, motion is in "
+    "position and no joint is homing, at most TIMEOUT seconds (default: no limit).",
 )
 def _wait(shell: Shell, text: str) -> None:
     limit = [real(word, "timeout", minimum=0.0) for word in words(text, 0, 1)]
@@ -421,10 +421,17 @@ def _wait(shell: Shell, text: str) -> None:
         while commands.wait_complete(min(WAIT_STEP_S, _left(deadline))) == -1:
             if _left(deadline) == 0:
                 raise CommandError("the last command is still running")
-    while shell.status().interp_state != cnc.INTERP_IDLE:
+    while not _is_idle(shell.status()):
         if _left(deadline) == 0:
-            raise CommandError("the interpreter is still busy")
+            raise CommandError("the machine is still busy")
         time.sleep(min(IDLE_POLL_S, _left(deadline)))
+
+
+def _is_idle(status) -> bool:
+    """Nothing runs: the interpreter is idle, motion in position, no joint homing (homing
+    is acknowledged when it starts, as in LinuxCNC, and goes on after)."""
+    homing = [joint.get("homing", 0) for joint in status.joint[: status.joints]]
+    return status.interp_state == cnc.INTERP_IDLE and status.inpos and not any(homing)
 
 
 def _left(deadline: float) -> float:
