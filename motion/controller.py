@@ -115,6 +115,10 @@ class MotionController:
         self.tolerance = 0.0
         self.next_motion_id = 0
         self.motion_type = 0
+        self.tool_offset = EmcPose()
+        self.is_feed_override_enabled = True
+        self.is_feed_hold_enabled = True
+        self.is_adaptive_feed_enabled = False
         self.errors: list[str] = []
         self._pending_douts: list[tuple[int, bool]] = []
         self._pending_aouts: list[tuple[int, float]] = []
@@ -505,10 +509,43 @@ class MotionController:
         elif isinstance(cmd, emc.EMC_SPINDLE_OFF):
             spindle.speed = 0.0
             spindle.is_brake_on = True
+        elif isinstance(cmd, emc.EMC_SPINDLE_SPEED):
+            sign = -1.0 if spindle.speed < 0 else 1.0
+            spindle.speed = sign * abs(cmd.speed) if spindle.speed else 0.0
+        elif isinstance(cmd, emc.EMC_SPINDLE_INCREASE | emc.EMC_SPINDLE_DECREASE):
+            step = abs(cmd.speed) or 100.0
+            if isinstance(cmd, emc.EMC_SPINDLE_DECREASE):
+                step = -min(step, abs(spindle.speed))
+            spindle.speed += step if spindle.speed >= 0 else -step
         elif isinstance(cmd, emc.EMC_SPINDLE_BRAKE_ENGAGE):
             spindle.is_brake_on = True
         elif isinstance(cmd, emc.EMC_SPINDLE_BRAKE_RELEASE):
             spindle.is_brake_on = False
+        return None
+
+    def _settings(self, cmd: emc.NMLmsg) -> str | None:
+        """Settings kept for status and later moves: tool offset, override enables."""
+        if isinstance(cmd, emc.EMC_TRAJ_SET_OFFSET):
+            self.tool_offset = _pose(cmd.offset)
+        elif isinstance(cmd, emc.EMC_TRAJ_SET_FO_ENABLE):
+            self.is_feed_override_enabled = bool(cmd.mode)
+        elif isinstance(cmd, emc.EMC_TRAJ_SET_FH_ENABLE):
+            self.is_feed_hold_enabled = bool(cmd.mode)
+        elif isinstance(cmd, emc.EMC_TRAJ_SET_SO_ENABLE):
+            if not 0 <= cmd.spindle < len(self.spindles):
+                return f"spindle {cmd.spindle} does not exist"
+            self.spindles[cmd.spindle].is_override_enabled = bool(cmd.mode)
+        elif isinstance(cmd, emc.EMC_MOTION_ADAPTIVE):
+            self.is_adaptive_feed_enabled = bool(cmd.status)
+        return None
+
+    def _spindle_sync(self, cmd: emc.EMC_TRAJ_SET_SPINDLESYNC) -> str | None:
+        """Spindle-synchronised motion (G33, G76, G95): the planner has no support yet."""
+        if cmd.feed_per_revolution:
+            return (
+                "spindle-synchronised motion (G33, G76, G95 feed per revolution) "
+                "is not supported yet"
+            )
         return None
 
     def _spindle_scale(self, cmd: emc.EMC_TRAJ_SET_SPINDLE_SCALE) -> str | None:
@@ -625,6 +662,9 @@ class MotionController:
         traj.kinematics_type = int(self.kins.kinematics_type())
         traj.distance_to_go = self.tp.distance_to_go if self.mode == COORD else 0.0
         traj.current_vel = self.tp.vel if self.mode == COORD else 0.0
+        traj.feed_override_enabled = self.is_feed_override_enabled
+        traj.feed_hold_enabled = self.is_feed_hold_enabled
+        traj.adaptive_feed_enabled = self.is_adaptive_feed_enabled
         for index, (joint, out) in enumerate(zip(self.joints, stat.joint, strict=False)):
             out.minPositionLimit = _finite_or_zero(joint.min_limit)
             out.maxPositionLimit = _finite_or_zero(joint.max_limit)
@@ -646,6 +686,7 @@ class MotionController:
             out.direction = (spindle.speed > 0) - (spindle.speed < 0)
             out.brake = spindle.is_brake_on
             out.enabled = spindle.speed != 0
+            out.spindle_override_enabled = spindle.is_override_enabled
         stat.synch_do[: len(self.digital_out)] = self.digital_out
         stat.synch_di[: len(self.digital_in)] = self.digital_in
         stat.analog_output[: len(self.analog_out)] = self.analog_out
@@ -713,6 +754,15 @@ _HANDLERS: dict[type, Callable[[MotionController, emc.NMLmsg], str | None]] = {
     emc.EMC_SPINDLE_BRAKE_ENGAGE: MotionController._spindle,
     emc.EMC_SPINDLE_BRAKE_RELEASE: MotionController._spindle,
     emc.EMC_TRAJ_SET_SPINDLE_SCALE: MotionController._spindle_scale,
+    emc.EMC_SPINDLE_SPEED: MotionController._spindle,
+    emc.EMC_SPINDLE_INCREASE: MotionController._spindle,
+    emc.EMC_SPINDLE_DECREASE: MotionController._spindle,
+    emc.EMC_TRAJ_SET_SPINDLESYNC: MotionController._spindle_sync,
+    emc.EMC_TRAJ_SET_OFFSET: MotionController._settings,
+    emc.EMC_TRAJ_SET_FO_ENABLE: MotionController._settings,
+    emc.EMC_TRAJ_SET_SO_ENABLE: MotionController._settings,
+    emc.EMC_TRAJ_SET_FH_ENABLE: MotionController._settings,
+    emc.EMC_MOTION_ADAPTIVE: MotionController._settings,
 }
 
 __all__ = ["Inputs", "Joint", "MotionController"]

@@ -468,6 +468,10 @@ class Task:
                 if not self._is_everything_done():
                     return
                 self.is_reading_done = True
+            elif isinstance(msg, emc.EMC_TRAJ_SET_G5X | emc.EMC_TRAJ_SET_G92):
+                pass  # offsets are task's: EMC_STAT shows them from the interpreter's parameters
+            elif isinstance(msg, emc.EMC_TRAJ_SET_ROTATION):
+                self.stat.task.rotation_xy = msg.rotation
             elif isinstance(msg, emc.EMC_SYSTEM_CMD):
                 if not self._is_everything_done() or not self._start_system_command(msg):
                     return

@@ -203,3 +203,29 @@ def test_status_reports_positions_joints_and_queue() -> None:
     assert stat.traj.actualPosition.tran.y == pytest.approx(2.0)
     assert [stat.joint[i].homed for i in range(3)] == [1, 1, 1]
     assert stat.joint[0].maxPositionLimit == 100.0 and stat.traj.joints == 3
+
+
+def test_settings_task_sends_with_every_program_are_accepted() -> None:
+    motion = enabled_homed()
+    offset = emc.EMC_TRAJ_SET_OFFSET()
+    offset.offset.tran.z = 12.5
+    for cmd in (
+        offset,
+        emc.EMC_TRAJ_SET_FO_ENABLE(mode=0),
+        emc.EMC_TRAJ_SET_SO_ENABLE(spindle=0, mode=0),
+        emc.EMC_TRAJ_SET_FH_ENABLE(mode=1),
+        emc.EMC_TRAJ_SET_SPINDLESYNC(spindle=0, feed_per_revolution=0.0),
+    ):
+        assert motion.handle(cmd) is None, cmd.NAME
+    assert motion.tool_offset.z == 12.5 and not motion.is_feed_override_enabled
+    refused = motion.handle(emc.EMC_TRAJ_SET_SPINDLESYNC(spindle=0, feed_per_revolution=1.5))
+    assert refused.startswith("spindle-synchronised motion")
+
+
+def test_spindle_speed_changes_keep_the_direction() -> None:
+    motion = enabled_homed()
+    motion.handle(emc.EMC_SPINDLE_ON(spindle=0, speed=-1000.0))
+    motion.handle(emc.EMC_SPINDLE_SPEED(spindle=0, speed=1500.0))
+    assert motion.spindles[0].speed == -1500.0
+    motion.handle(emc.EMC_SPINDLE_DECREASE(spindle=0, speed=500.0))
+    assert motion.spindles[0].speed == -1000.0
