@@ -59,7 +59,7 @@ class Launcher:
         if running is not None:
             raise LaunchError(
                 f"a machine is already running for instance '{current_instance()}' "
-                f"(pid {running.get('pid')}, {running.get('ini')}): stop it first, or set "
+                f"(pid {running.pid}, {running.ini}): stop it first, or set "
                 f"{INSTANCE_ENV} to run another one"
             )
         leftovers = remove_instance_objects()

@@ -7,6 +7,8 @@ position and tool files); the test drives it like a LinuxCNC script would.
 
 from __future__ import annotations
 
+import contextlib
+import os
 import shutil
 import signal
 import subprocess
@@ -17,6 +19,7 @@ from pathlib import Path
 import pytest
 
 import cnc
+from cnc.runtime import read_runtime_info
 from nml.ipcnames import instance_objects
 
 MACHINE = Path(__file__).with_name("machine")
@@ -26,19 +29,20 @@ class Machine:
     def __init__(self, proc: subprocess.Popen[str], folder: Path) -> None:
         self.proc = proc
         self.folder = folder
-        self.stat = cnc.stat()
-        self.command = cnc.command()
-        self.errors = cnc.error_channel()
 
     def wait_ready(self, timeout: float = 30) -> None:
+        """Until this launcher says its machine runs; then connect, as a UI would."""
         deadline = time.monotonic() + timeout
         while time.monotonic() < deadline:
             assert self.proc.poll() is None, self.proc.stderr.read()
-            try:
+            info = read_runtime_info()
+            if info is not None and info.pid == self.proc.pid:
+                self.stat = cnc.stat()
+                self.command = cnc.command()
+                self.errors = cnc.error_channel()
                 self.stat.poll()
                 return
-            except cnc.error:
-                time.sleep(0.05)
+            time.sleep(0.05)
         raise AssertionError("the machine did not come up")
 
     def until(self, condition, timeout: float = 20) -> None:
@@ -167,3 +171,58 @@ def test_sigterm_stops_everything_and_leaves_nothing(procs, tmp_path: Path, cnc_
     assert proc.wait(timeout=30) == 0
     assert instance_objects(cnc_instance) == []
     assert (folder / "position.txt").exists()
+
+
+def machine_pids(launcher: subprocess.Popen[str], folder: Path) -> dict[str, int]:
+    """The machine's processes: the launcher's children and whatever was started with the
+    machine's INI file (iocontrol outlives the halcmd that started it)."""
+    found: dict[str, int] = {}
+    children = subprocess.run(["pgrep", "-P", str(launcher.pid)], capture_output=True, text=True)
+    by_ini = subprocess.run(
+        ["pgrep", "-f", f"ini {folder}/mill.ini"], capture_output=True, text=True
+    )
+    for pid in {*children.stdout.split(), *by_ini.stdout.split()}:
+        with contextlib.suppress(OSError):
+            found[Path(f"/proc/{pid}/cmdline").read_text().replace("\0", " ")] = int(pid)
+    return found
+
+
+def test_killing_task_stops_the_machine_and_cleans_up(procs, tmp_path: Path, cnc_instance) -> None:
+    folder = tmp_path / "machine"
+    shutil.copytree(MACHINE, folder)
+    proc = procs.python("-m", "cnc", "run", "--headless", "mill.ini", cwd=folder)
+    Machine(proc, folder).wait_ready()
+    (task_pid,) = [pid for line, pid in machine_pids(proc, folder).items() if "-m task" in line]
+    os.kill(task_pid, signal.SIGKILL)
+    assert proc.wait(timeout=30) == 1  # the launcher noticed and shut everything down
+    assert "task exited unexpectedly" in proc.stderr.read()
+    assert instance_objects(cnc_instance) == []
+
+
+def test_a_restart_after_kill_9_of_everything_starts_clean(procs, tmp_path: Path) -> None:
+    folder = tmp_path / "machine"
+    shutil.copytree(MACHINE, folder)
+    first = procs.python("-m", "cnc", "run", "--headless", "mill.ini", cwd=folder)
+    Machine(first, folder).wait_ready()
+    pids = machine_pids(first, folder)
+    assert any("hal.rtapi_app" in line for line in pids) and any(
+        "iocontrol" in line for line in pids
+    )
+    for pid in [first.pid, *pids.values()]:  # nobody gets a chance to clean up
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(pid, signal.SIGKILL)
+    first.wait(timeout=10)
+    second = procs.python("-m", "cnc", "run", "--headless", "mill.ini", cwd=folder)
+    machine = Machine(second, folder)
+    machine.wait_ready()
+    machine.ready_to_move()  # stale buffers, HAL and runtime file replaced: it works
+    second.send_signal(signal.SIGTERM)
+    assert second.wait(timeout=30) == 0
+
+
+def test_a_second_launch_of_the_same_instance_is_refused(machine: Machine, procs) -> None:
+    second = procs.python("-m", "cnc", "run", "--headless", "mill.ini", cwd=machine.folder)
+    assert second.wait(timeout=30) == 1
+    assert "a machine is already running" in second.stderr.read()
+    machine.stat.poll()  # the first one is untouched
+    assert machine.stat.task_state == cnc.STATE_ESTOP
