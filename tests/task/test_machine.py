@@ -226,3 +226,62 @@ def test_a_second_launch_of_the_same_instance_is_refused(machine: Machine, procs
     assert "a machine is already running" in second.stderr.read()
     machine.stat.poll()  # the first one is untouched
     assert machine.stat.task_state == cnc.STATE_ESTOP
+
+
+def start_long_program(machine: Machine) -> None:
+    program = machine.folder / "long.ngc"
+    program.write_text("G21 G90\nG1 X40 F1800\nG1 X0\nM2\n")
+    machine.ready_to_move()
+    c = machine.command
+    c.mode(cnc.MODE_AUTO)
+    c.wait_complete()
+    c.program_open(str(program))
+    c.wait_complete()
+    c.auto(cnc.AUTO_RUN, 0)
+    machine.until(lambda s: s.position[0] > 2.0, timeout=10)
+
+
+def test_pause_holds_position_and_resume_continues_the_program(machine: Machine) -> None:
+    start_long_program(machine)
+    c, s = machine.command, machine.stat
+    c.auto(cnc.AUTO_PAUSE)
+    c.wait_complete()
+    machine.until(lambda s: s.paused and s.current_vel == 0.0)
+    held = s.position[0]
+    time.sleep(0.3)
+    s.poll()
+    assert s.position[0] == held and s.interp_state == cnc.INTERP_PAUSED
+    c.auto(cnc.AUTO_RESUME)
+    c.wait_complete()
+    machine.until(lambda s: s.interp_state == cnc.INTERP_IDLE and s.inpos, timeout=30)
+    assert s.position[0] == pytest.approx(0.0, abs=1e-9)  # the whole program ran
+
+
+def test_abort_mid_move_stops_and_reports_it(machine: Machine) -> None:
+    start_long_program(machine)
+    machine.messages(0.05)
+    c, s = machine.command, machine.stat
+    c.abort()
+    c.wait_complete()
+    machine.until(lambda s: s.inpos and s.interp_state == cnc.INTERP_IDLE, timeout=5)
+    stopped_at = s.position[0]
+    assert 2.0 < stopped_at < 40.0  # decelerated on the way, the rest of the program dropped
+    time.sleep(0.3)
+    s.poll()
+    assert s.position[0] == stopped_at
+    assert (cnc.OPERATOR_TEXT, "task: aborted") in machine.messages()
+
+
+def test_killing_a_ui_mid_program_changes_nothing(machine: Machine, procs) -> None:
+    start_long_program(machine)
+    watcher = procs.python(
+        "-c",
+        "import cnc, time\ns = cnc.stat(); e = cnc.error_channel()\n"
+        "while True:\n    s.poll(); e.poll(); time.sleep(0.01)\n",
+    )
+    time.sleep(0.5)
+    watcher.kill()
+    watcher.wait(10)
+    machine.until(lambda s: s.interp_state == cnc.INTERP_IDLE and s.inpos, timeout=30)
+    assert machine.stat.position[0] == pytest.approx(0.0, abs=1e-9)
+    assert machine.stat.task_state == cnc.STATE_ON
