@@ -20,6 +20,7 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "run": ("cnc.launcher:main", "start a machine from an INI file, like linuxcnc"),
     "top": ("cnc.ui.top:main", "live status view of the running machine, like linuxcnctop"),
     "sh": ("cnc.ui.sh:main", "command shell and script runner, like linuxcncrsh"),
+    "ui": ("cnc.ui.web.server:main", "operator UI in the browser (ui web [INI] [--host --port])"),
 }
 
 
