@@ -33,8 +33,14 @@ CANON_WORKPIECE, CANON_XYZ = 1, 2
 DIGITAL_INPUT, ANALOG_INPUT = 1, 0
 
 _PLANE_NAMES = {PLANE_XY: "XY", PLANE_YZ: "YZ", PLANE_XZ: "XZ"}
-_AXIS_NAMES = {0: "CANON_AXIS_X", 1: "CANON_AXIS_Y", 2: "CANON_AXIS_Z",
-               3: "CANON_AXIS_A", 4: "CANON_AXIS_B", 5: "CANON_AXIS_C"}
+_AXIS_NAMES = {
+    0: "CANON_AXIS_X",
+    1: "CANON_AXIS_Y",
+    2: "CANON_AXIS_Z",
+    3: "CANON_AXIS_A",
+    4: "CANON_AXIS_B",
+    5: "CANON_AXIS_C",
+}
 
 
 class Canon(Protocol):
@@ -42,25 +48,94 @@ class Canon(Protocol):
 
     # representation
     def SET_XY_ROTATION(self, t: float) -> None: ...
-    def SET_G5X_OFFSET(self, index: int, x: float, y: float, z: float, a: float, b: float,
-                       c: float, u: float, v: float, w: float) -> None: ...
-    def SET_G92_OFFSET(self, x: float, y: float, z: float, a: float, b: float, c: float,
-                       u: float, v: float, w: float) -> None: ...
+    def SET_G5X_OFFSET(
+        self,
+        index: int,
+        x: float,
+        y: float,
+        z: float,
+        a: float,
+        b: float,
+        c: float,
+        u: float,
+        v: float,
+        w: float,
+    ) -> None: ...
+    def SET_G92_OFFSET(
+        self,
+        x: float,
+        y: float,
+        z: float,
+        a: float,
+        b: float,
+        c: float,
+        u: float,
+        v: float,
+        w: float,
+    ) -> None: ...
     def USE_LENGTH_UNITS(self, units: int) -> None: ...
     # motion
     def SET_TRAVERSE_RATE(self, rate: float) -> None: ...
-    def STRAIGHT_TRAVERSE(self, line: int, x: float, y: float, z: float, a: float, b: float,
-                          c: float, u: float, v: float, w: float) -> None: ...
-    def STRAIGHT_FEED(self, line: int, x: float, y: float, z: float, a: float, b: float,
-                      c: float, u: float, v: float, w: float) -> None: ...
-    def ARC_FEED(self, line: int, first_end: float, second_end: float, first_axis: float,
-                 second_axis: float, rotation: int, axis_end: float, a: float, b: float,
-                 c: float, u: float, v: float, w: float) -> None: ...
-    def STRAIGHT_PROBE(self, line: int, x: float, y: float, z: float, a: float, b: float,
-                       c: float, u: float, v: float, w: float, probe_type: int) -> None: ...
+    def STRAIGHT_TRAVERSE(
+        self,
+        line: int,
+        x: float,
+        y: float,
+        z: float,
+        a: float,
+        b: float,
+        c: float,
+        u: float,
+        v: float,
+        w: float,
+    ) -> None: ...
+    def STRAIGHT_FEED(
+        self,
+        line: int,
+        x: float,
+        y: float,
+        z: float,
+        a: float,
+        b: float,
+        c: float,
+        u: float,
+        v: float,
+        w: float,
+    ) -> None: ...
+    def ARC_FEED(
+        self,
+        line: int,
+        first_end: float,
+        second_end: float,
+        first_axis: float,
+        second_axis: float,
+        rotation: int,
+        axis_end: float,
+        a: float,
+        b: float,
+        c: float,
+        u: float,
+        v: float,
+        w: float,
+    ) -> None: ...
+    def STRAIGHT_PROBE(
+        self,
+        line: int,
+        x: float,
+        y: float,
+        z: float,
+        a: float,
+        b: float,
+        c: float,
+        u: float,
+        v: float,
+        w: float,
+        probe_type: int,
+    ) -> None: ...
     def RIGID_TAP(self, line: int, x: float, y: float, z: float, scale: float) -> None: ...
-    def NURBS_FEED(self, line: int, points: list[tuple[float, float, float]],
-                   order: int) -> None: ...
+    def NURBS_FEED(
+        self, line: int, points: list[tuple[float, float, float]], order: int
+    ) -> None: ...
     def DWELL(self, seconds: float) -> None: ...
     def SET_FEED_MODE(self, spindle: int, mode: int) -> None: ...
     def SET_FEED_RATE(self, rate: float) -> None: ...
@@ -79,9 +154,16 @@ class Canon(Protocol):
     def ORIENT_SPINDLE(self, spindle: int, orientation: float, mode: int) -> None: ...
     def WAIT_SPINDLE_ORIENT_COMPLETE(self, spindle: int, timeout: float) -> None: ...
     # tools
-    def SET_TOOL_TABLE_ENTRY(self, idx: int, toolno: int, offset: list[float],
-                             diameter: float, frontangle: float, backangle: float,
-                             orientation: int) -> None: ...
+    def SET_TOOL_TABLE_ENTRY(
+        self,
+        idx: int,
+        toolno: int,
+        offset: list[float],
+        diameter: float,
+        frontangle: float,
+        backangle: float,
+        orientation: int,
+    ) -> None: ...
     def USE_TOOL_LENGTH_OFFSET(self, offset: list[float]) -> None: ...
     def CHANGE_TOOL(self, slot: int) -> None: ...
     def SELECT_TOOL(self, tool: int) -> None: ...
@@ -275,8 +357,10 @@ class PrintingCanon:
         if text is not self._last_text:
             self._last_text = text
             self._last_prefix = _nline(text)
-        self.write(f"{self.counter:5d} {self._last_prefix}STRAIGHT_TRAVERSE({x:.4f}, {y:.4f}, "
-                   f"{z:.4f}, {a:.4f}, {b:.4f}, {c:.4f})\n")
+        self.write(
+            f"{self.counter:5d} {self._last_prefix}STRAIGHT_TRAVERSE({x:.4f}, {y:.4f}, "
+            f"{z:.4f}, {a:.4f}, {b:.4f}, {c:.4f})\n"
+        )
         self.counter += 1
         self.position = [x, y, z, a, b, c]
 
@@ -285,13 +369,29 @@ class PrintingCanon:
         if text is not self._last_text:
             self._last_text = text
             self._last_prefix = _nline(text)
-        self.write(f"{self.counter:5d} {self._last_prefix}STRAIGHT_FEED({x:.4f}, {y:.4f}, "
-                   f"{z:.4f}, {a:.4f}, {b:.4f}, {c:.4f})\n")
+        self.write(
+            f"{self.counter:5d} {self._last_prefix}STRAIGHT_FEED({x:.4f}, {y:.4f}, "
+            f"{z:.4f}, {a:.4f}, {b:.4f}, {c:.4f})\n"
+        )
         self.counter += 1
         self.position = [x, y, z, a, b, c]
 
-    def ARC_FEED(self, line, first_end, second_end, first_axis, second_axis, rotation,
-                 axis_end, a, b, c, u=0.0, v=0.0, w=0.0) -> None:
+    def ARC_FEED(
+        self,
+        line,
+        first_end,
+        second_end,
+        first_axis,
+        second_axis,
+        rotation,
+        axis_end,
+        a,
+        b,
+        c,
+        u=0.0,
+        v=0.0,
+        w=0.0,
+    ) -> None:
         self.emit(
             f"ARC_FEED({first_end:.4f}, {second_end:.4f}, {first_axis:.4f}, "
             f"{second_axis:.4f}, {rotation}, {axis_end:.4f}, {a:.4f}, {b:.4f}, {c:.4f})"
@@ -398,8 +498,9 @@ class PrintingCanon:
         self.emit(f"SPINDLE.{spindle}.WAIT_ORIENT_COMPLETE({timeout:.4f})")
 
     # ------------------------------------------------------------------- tools
-    def SET_TOOL_TABLE_ENTRY(self, idx, toolno, offset, diameter, frontangle, backangle,
-                             orientation) -> None:
+    def SET_TOOL_TABLE_ENTRY(
+        self, idx, toolno, offset, diameter, frontangle, backangle, orientation
+    ) -> None:
         entry = self.tools.get(idx)
         entry.toolno = toolno
         entry.offset = list(offset)

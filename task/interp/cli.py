@@ -54,7 +54,8 @@ _stdin_drained = False
 
 
 class _Out:
-    """Buffered writer for the canon; flushed before anything goes to stderr."""
+    """Buffered writer for the canon; flushed before anything goes to stderr and every
+    few thousand lines (rs274 itself writes unbuffered)."""
 
     def __init__(self, stream) -> None:
         self.stream = stream
@@ -111,7 +112,10 @@ def interpret_from_keyboard(interp: Interpreter, out: _Out, block_delete: bool) 
 def interpret_from_file(interp: Interpreter, out: _Out, do_next: int, block_delete: bool) -> int:
     interp.canon.SET_BLOCK_DELETE(block_delete)
     status = 0
+    parts = out.parts
     while True:
+        if len(parts) >= 4096:
+            out.flush()
         try:
             read_status = interp.read()
         except InterpError as error:
@@ -268,10 +272,13 @@ def _menu(out: _Out, block_delete: bool, tool_files: list[str], tools: ToolTable
     submenu are offered by rs274 too but not here (use -v and -n).
     """
     while True:
-        _err(out, "enter a number:\n1 = start interpreting\n2 = choose parameter file ...\n"
-                  "3 = read tool file ...\n"
-                  f"4 = turn block delete switch {'OFF' if block_delete else 'ON'}\n"
-                  "5 = adjust error handling...\nenter choice => ")
+        _err(
+            out,
+            "enter a number:\n1 = start interpreting\n2 = choose parameter file ...\n"
+            "3 = read tool file ...\n"
+            f"4 = turn block delete switch {'OFF' if block_delete else 'ON'}\n"
+            "5 = adjust error handling...\nenter choice => ",
+        )
         line = sys.stdin.readline()
         if not sys.stdin.isatty():
             # rs274's menu reads with stdio, which buffers the whole pipe: readline() then

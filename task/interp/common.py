@@ -43,11 +43,17 @@ def is_near_int(value: float) -> tuple[bool, int]:
 
 
 def axis_words(block: Block) -> list[float | None]:
-    return [block.x_number if block.x_flag else None, block.y_number if block.y_flag else None,
-            block.z_number if block.z_flag else None, block.a_number if block.a_flag else None,
-            block.b_number if block.b_flag else None, block.c_number if block.c_flag else None,
-            block.u_number if block.u_flag else None, block.v_number if block.v_flag else None,
-            block.w_number if block.w_flag else None]
+    return [
+        block.x_number if block.x_flag else None,
+        block.y_number if block.y_flag else None,
+        block.z_number if block.z_flag else None,
+        block.a_number if block.a_flag else None,
+        block.b_number if block.b_flag else None,
+        block.c_number if block.c_flag else None,
+        block.u_number if block.u_flag else None,
+        block.v_number if block.v_flag else None,
+        block.w_number if block.w_flag else None,
+    ]
 
 
 def wrapped_msg(value: float, axis: str) -> str:

@@ -70,8 +70,18 @@ class CompMixin:
                 for k in (5, 6, 7, 11, 12, 13):
                     q[k] *= factor
 
-    def _enqueue_move(self, kind: int, line: int, d1: float, d2: float, d3: float, x: float,
-                      y: float, z: float, rest) -> None:
+    def _enqueue_move(
+        self,
+        kind: int,
+        line: int,
+        d1: float,
+        d2: float,
+        d3: float,
+        x: float,
+        y: float,
+        z: float,
+        rest,
+    ) -> None:
         """enqueue_STRAIGHT_FEED/TRAVERSE: store in machine axis order."""
         if self.plane == C.PLANE_XZ:
             entry = [kind, line, d2, d3, d1, y, z, x, *rest]
@@ -79,10 +89,12 @@ class CompMixin:
             entry = [kind, line, d1, d2, d3, x, y, z, *rest]
         self.qc.append(entry)
 
-    def _enqueue_arc(self, line, original_turns, end1, end2, center1, center2, turn, end3,
-                     rest) -> None:
-        self.qc.append([QARC, line, original_turns, end1, end2, center1, center2, turn, end3,
-                        *rest])
+    def _enqueue_arc(
+        self, line, original_turns, end1, end2, center1, center2, turn, end3, rest
+    ) -> None:
+        self.qc.append(
+            [QARC, line, original_turns, end1, end2, center1, center2, turn, end3, *rest]
+        )
 
     def _lathe_x(self, x: float) -> float:
         if self.plane != C.PLANE_XZ:
@@ -112,14 +124,22 @@ class CompMixin:
         for q in self.qc:
             kind = q[0]
             if kind == QARC:
-                canon.ARC_FEED(q[1], self._lathe_z(q[3]), self._lathe_x(q[4]),
-                               self._lathe_z(q[5]), self._lathe_x(q[6]), q[7], q[8], *q[9:15])
+                canon.ARC_FEED(
+                    q[1],
+                    self._lathe_z(q[3]),
+                    self._lathe_x(q[4]),
+                    self._lathe_z(q[5]),
+                    self._lathe_x(q[6]),
+                    q[7],
+                    q[8],
+                    *q[9:15],
+                )
             elif kind == QFEED:
-                canon.STRAIGHT_FEED(q[1], self._lathe_x(q[5]), q[6], self._lathe_z(q[7]),
-                                    *q[8:14])
+                canon.STRAIGHT_FEED(q[1], self._lathe_x(q[5]), q[6], self._lathe_z(q[7]), *q[8:14])
             elif kind == QTRAVERSE:
-                canon.STRAIGHT_TRAVERSE(q[1], self._lathe_x(q[5]), q[6], self._lathe_z(q[7]),
-                                        *q[8:14])
+                canon.STRAIGHT_TRAVERSE(
+                    q[1], self._lathe_x(q[5]), q[6], self._lathe_z(q[7]), *q[8:14]
+                )
             else:
                 getattr(canon, q[1])(*q[2])
         self._qc_clear()
@@ -139,12 +159,13 @@ class CompMixin:
                 if abs(r1 - r2) > 0.01:
                     raise InterpError(
                         "BUG: cutter compensation has generated an invalid arc with mismatched "
-                        f"radii r1 {r1:f} r2 {r2:f}\n")
+                        f"radii r1 {r1:f} r2 {r2:f}\n"
+                    )
                 tol = 0.0254 if self.length_units == C.UNITS_MM else 0.001
                 if l1 != 0.0 and self.endpoint_valid and abs(l2) > abs(l1) + tol:
                     raise InterpError(
-                        "Arc move in concave corner cannot be reached by the tool without "
-                        "gouging")
+                        "Arc move in concave corner cannot be reached by the tool without gouging"
+                    )
             elif kind in (QFEED, QTRAVERSE):
                 if xz:
                     x1, y1 = q[4], q[2]
@@ -156,7 +177,8 @@ class CompMixin:
                 if self.endpoint_valid and dot < 0:
                     what = "Straight traverse" if kind == QTRAVERSE else "Straight feed"
                     raise InterpError(
-                        f"{what} in concave corner cannot be reached by the tool without gouging")
+                        f"{what} in concave corner cannot be reached by the tool without gouging"
+                    )
                 if xz:
                     q[7], q[5] = x, y
                 else:
@@ -205,15 +227,25 @@ class CompMixin:
             raise InterpError("Bug side not right or left")
         if distance <= radius:
             raise InterpError(
-                "Length of cutter compensation entry move is not greater than the tool radius")
+                "Length of cutter compensation entry move is not greater than the tool radius"
+            )
         angle = math.atan2(py - cy, px - cx)
         alpha = ldmath.plus_pi_2(angle) if side == LEFT else ldmath.minus_pi_2(angle)
         end_x = px + radius * math.cos(alpha)
         end_y = py + radius * math.sin(alpha)
         self.set_endpoint(cx, cy)
         kind = QTRAVERSE if move == G_0 else QFEED
-        self._enqueue_move(kind, block.line_number, math.cos(alpha), math.sin(alpha), 0.0,
-                           end_x, end_y, pz, ends[3:9])
+        self._enqueue_move(
+            kind,
+            block.line_number,
+            math.cos(alpha),
+            math.sin(alpha),
+            0.0,
+            end_x,
+            end_y,
+            pz,
+            ends[3:9],
+        )
         self.cutter_comp_firstmove = False
         self.comp_set_current(end_x, end_y, pz)
         self.current[3:9] = ends[3:9]
@@ -228,8 +260,9 @@ class CompMixin:
         kind = QTRAVERSE if move == G_0 else QFEED
         rest = ends[3:9]
         if py == opy and px == opx:
-            self._enqueue_move(kind, block.line_number, px - opx, py - opy, pz - opz, cx, cy,
-                               pz, rest)
+            self._enqueue_move(
+                kind, block.line_number, px - opx, py - opy, pz - opz, cx, cy, pz, rest
+            )
         else:
             side = self.cutter_comp_side
             radius = self.cutter_comp_radius
@@ -252,8 +285,11 @@ class CompMixin:
             end_y = py + radius * math.sin(alpha + gamma)
             mid_x = opx + radius * math.cos(alpha + gamma)
             mid_y = opy + radius * math.sin(alpha + gamma)
-            arc_first = bool(self.qc) and self.qc[0][0] == QARC and (
-                (side == RIGHT and self.qc[0][7] > 0) or (side == LEFT and self.qc[0][7] < 0))
+            arc_first = (
+                bool(self.qc)
+                and self.qc[0][0] == QARC
+                and ((side == RIGHT and self.qc[0][7] > 0) or (side == LEFT and self.qc[0][7] < 0))
+            )
             if beta < -small or ld(beta) > pi + small or (ld(beta) > pi - small and arc_first):
                 concave = True
             else:
@@ -261,11 +297,21 @@ class CompMixin:
             if not concave and beta > small:
                 self.move_endpoint_and_flush(cx, cy)
                 if move == G_1:
-                    self._enqueue_arc(block.line_number, 0.0, mid_x, mid_y, opx, opy,
-                                      -1 if side == LEFT else 1, cz, rest)
+                    self._enqueue_arc(
+                        block.line_number,
+                        0.0,
+                        mid_x,
+                        mid_y,
+                        opx,
+                        opy,
+                        -1 if side == LEFT else 1,
+                        cz,
+                        rest,
+                    )
                 else:
-                    self._enqueue_move(QTRAVERSE, block.line_number, 0.0, 0.0, 0.0, mid_x,
-                                       mid_y, cz, rest)
+                    self._enqueue_move(
+                        QTRAVERSE, block.line_number, 0.0, 0.0, 0.0, mid_x, mid_y, cz, rest
+                    )
                 self.dequeue_canons()
                 self.set_endpoint(mid_x, mid_y)
             elif concave:
@@ -274,18 +320,25 @@ class CompMixin:
                     halfcorner = float((ld(beta) + pi) / 2.0)
                     if halfcorner == 0.0:
                         raise InterpError(
-                            "Zero degree inside corner is invalid for cutter compensation")
+                            "Zero degree inside corner is invalid for cutter compensation"
+                        )
                     retreat = radius / math.tan(halfcorner)
                     mid_x = cx + retreat * math.cos(theta + gamma)
                     mid_y = cy + retreat * math.sin(theta + gamma)
                     self.move_endpoint_and_flush(mid_x, mid_y)
                 else:
-                    p_end1, p_end2, p_c1, p_c2, p_turn = front[3], front[4], front[5], \
-                        front[6], front[7]
+                    p_end1, p_end2, p_c1, p_c2, p_turn = (
+                        front[3],
+                        front[4],
+                        front[5],
+                        front[6],
+                        front[7],
+                    )
                     oldrad = ldmath.hypot(p_c2 - p_end2, p_c1 - p_end1)
                     base_dir = math.atan2(py - opy, px - opx)
-                    theta2 = float(ld(base_dir) + pi_2) if p_turn > 0 else \
-                        float(ld(base_dir) - pi_2)
+                    theta2 = (
+                        float(ld(base_dir) + pi_2) if p_turn > 0 else float(ld(base_dir) - pi_2)
+                    )
                     phi = math.atan2(p_c2 - opy, p_c1 - opx)
                     inside = _inside(side, p_turn)
                     oldrad_uncomp = oldrad + radius if inside else oldrad - radius
@@ -295,7 +348,8 @@ class CompMixin:
                     if ratio > 1.0 or ratio < -1.0:
                         raise InterpError(
                             "Arc to straight motion makes a corner the compensated tool can't "
-                            "fit in without gouging")
+                            "fit in without gouging"
+                        )
                     if (p_turn > 0) == inside:
                         angle = float(-ld(math.acos(ratio)) + ld(theta2) + pi)
                     else:
@@ -306,8 +360,9 @@ class CompMixin:
             else:
                 self.dequeue_canons()
                 self.set_endpoint(cx, cy)
-            self._enqueue_move(kind, block.line_number, px - opx, py - opy, pz - opz, end_x,
-                               end_y, pz, rest)
+            self._enqueue_move(
+                kind, block.line_number, px - opx, py - opy, pz - opz, end_x, end_y, pz, rest
+            )
         self.comp_set_current(end_x, end_y, pz)
         self.current[3:9] = rest
         self.comp_set_programmed(px, py, pz)
@@ -315,8 +370,9 @@ class CompMixin:
     # --------------------------------------------------------------- arcs
     def _comp_tolerances(self) -> tuple[float, float]:
         inch = self.length_units == C.UNITS_INCHES
-        spiral = (self.center_arc_radius_tolerance_inch if inch
-                  else self.center_arc_radius_tolerance_mm)
+        spiral = (
+            self.center_arc_radius_tolerance_inch if inch else self.center_arc_radius_tolerance_mm
+        )
         return spiral, (RADIUS_TOLERANCE_INCH if inch else RADIUS_TOLERANCE_MM)
 
     def _arc_p(self, block: Block) -> int:
@@ -330,18 +386,31 @@ class CompMixin:
         cx, cy, cz = self.comp_get_current()
         if ldmath.hypot(end_x - cx, end_y - cy) <= tool_radius:
             raise InterpError(
-                "Radius of cutter compensation entry arc is not greater than the tool radius")
+                "Radius of cutter compensation entry arc is not greater than the tool radius"
+            )
         if block.r_flag:
             if abs(block.r_number) <= tool_radius and _inside_move(side, move):
                 raise InterpError("Tool radius not less than arc radius with comp")
-            center_x, center_y, turn = self.arc_data_r(move, cx, cy, end_x, end_y,
-                                                       block.r_number, self._arc_p(block),
-                                                       radius_tol)
+            center_x, center_y, turn = self.arc_data_r(
+                move, cx, cy, end_x, end_y, block.r_number, self._arc_p(block), radius_tol
+            )
         else:
             center_x, center_y, turn = self.arc_data_ijk(
-                move, cx, cy, end_x, end_y, self.ijk_distance_mode == MODE_ABSOLUTE,
-                offsets[0], offsets[1], self._arc_p(block), radius_tol, spiral_abs,
-                SPIRAL_RELATIVE_TOLERANCE, comp_side=side, tool_radius=tool_radius)
+                move,
+                cx,
+                cy,
+                end_x,
+                end_y,
+                self.ijk_distance_mode == MODE_ABSOLUTE,
+                offsets[0],
+                offsets[1],
+                self._arc_p(block),
+                radius_tol,
+                spiral_abs,
+                SPIRAL_RELATIVE_TOLERANCE,
+                comp_side=side,
+                tool_radius=tool_radius,
+            )
         self._inverse_time_arc(cx, cy, cz, center_x, center_y, turn, end_x, end_y, end_z, block)
         if _inside(side, turn):
             gamma = math.atan2(center_y - end_y, center_x - end_x)
@@ -359,16 +428,29 @@ class CompMixin:
         c_len = b_len / math.cos(a_ang)
         center_x = end_x + c_len * math.cos(ab_ang)
         center_y = end_y + c_len * math.sin(ab_ang)
-        if abs(ldmath.hypot(center_x - end_x, center_y - end_y)
-               - ldmath.hypot(center_x - cx, center_y - cy)) > spiral_abs:
+        if (
+            abs(
+                ldmath.hypot(center_x - end_x, center_y - end_y)
+                - ldmath.hypot(center_x - cx, center_y - cy)
+            )
+            > spiral_abs
+        ):
             raise InterpError("Bug in tool radius comp")
         rest = ends[3:9]
         if self.cutter_comp_orientation not in (0, 9):
             self._enqueue_move(QFEED, block.line_number, 0.0, 0.0, 0.0, cx, cy, cz, rest)
             self.set_endpoint(cx, cy)
-        self._enqueue_arc(block.line_number,
-                          ldmath.find_turn(cx, cy, center_x, center_y, turn, end_x, end_y),
-                          end_x, end_y, center_x, center_y, turn, end_z, rest)
+        self._enqueue_arc(
+            block.line_number,
+            ldmath.find_turn(cx, cy, center_x, center_y, turn, end_x, end_y),
+            end_x,
+            end_y,
+            center_x,
+            center_y,
+            turn,
+            end_z,
+            rest,
+        )
         self.comp_set_current(end_x, end_y, end_z)
         self.current[3:9] = rest
 
@@ -379,16 +461,25 @@ class CompMixin:
         opx, opy, opz = self.comp_get_programmed()
         cx, cy, cz = self.comp_get_current()
         if block.r_flag:
-            centerx, centery, turn = self.arc_data_r(move, opx, opy, end_x, end_y,
-                                                     block.r_number, self._arc_p(block),
-                                                     radius_tol)
+            centerx, centery, turn = self.arc_data_r(
+                move, opx, opy, end_x, end_y, block.r_number, self._arc_p(block), radius_tol
+            )
         else:
             centerx, centery, turn = self.arc_data_ijk(
-                move, opx, opy, end_x, end_y, self.ijk_distance_mode == MODE_ABSOLUTE,
-                offsets[0], offsets[1], self._arc_p(block), radius_tol, spiral_abs,
-                SPIRAL_RELATIVE_TOLERANCE)
-        self._inverse_time_arc(opx, opy, opz, centerx, centery, turn, end_x, end_y, end_z,
-                               block)
+                move,
+                opx,
+                opy,
+                end_x,
+                end_y,
+                self.ijk_distance_mode == MODE_ABSOLUTE,
+                offsets[0],
+                offsets[1],
+                self._arc_p(block),
+                radius_tol,
+                spiral_abs,
+                SPIRAL_RELATIVE_TOLERANCE,
+            )
+        self._inverse_time_arc(opx, opy, opz, centerx, centery, turn, end_x, end_y, end_z, block)
         side = self.cutter_comp_side
         tool_radius = self.cutter_comp_radius
         arc_radius = ldmath.hypot(centerx - end_x, centery - end_y)
@@ -412,8 +503,11 @@ class CompMixin:
         new_end_x = end_x + tool_radius * math.cos(gamma)
         new_end_y = end_y + tool_radius * math.sin(gamma)
         rest = ends[3:9]
-        if (beta < -small or ld(beta) > pi + small
-                or (abs(ld(beta) - pi) < small and not _inside(side, turn))):
+        if (
+            beta < -small
+            or ld(beta) > pi + small
+            or (abs(ld(beta) - pi) < small and not _inside(side, turn))
+        ):
             front = self._qc_front()
             if front is None or front[0] != QARC:
                 cy2 = arc_radius * ldmath.sinl(ld(beta) - pi_2)
@@ -436,20 +530,28 @@ class CompMixin:
                 midy = centery + dist_from_center * math.sin(angle)
                 self.move_endpoint_and_flush(midx, midy)
             else:
-                p_end1, p_end2, p_c1, p_c2, p_turn = front[3], front[4], front[5], front[6], \
-                    front[7]
+                p_end1, p_end2, p_c1, p_c2, p_turn = (
+                    front[3],
+                    front[4],
+                    front[5],
+                    front[6],
+                    front[7],
+                )
                 oldrad = ldmath.hypot(p_c2 - p_end2, p_c1 - p_end1)
-                newrad = arc_radius - tool_radius if _inside(side, turn) else \
-                    arc_radius + tool_radius
+                newrad = (
+                    arc_radius - tool_radius if _inside(side, turn) else arc_radius + tool_radius
+                )
                 arc_cc = ldmath.hypot(p_c2 - centery, p_c1 - centerx)
                 if oldrad == 0 or arc_cc == 0:
                     raise InterpError(
-                        "Arc to arc motion is invalid because the arcs have the same center")
+                        "Arc to arc motion is invalid because the arcs have the same center"
+                    )
                 a = (oldrad * oldrad + arc_cc * arc_cc - newrad * newrad) / (2 * oldrad * arc_cc)
                 if a > 1.0 or a < -1.0:
                     raise InterpError(
                         "Arc to arc motion makes a corner the compensated tool can't fit in "
-                        "without gouging")
+                        "without gouging"
+                    )
                 pullback = math.acos(a)
                 cc_dir = math.atan2(centery - p_c2, centerx - p_c1)
                 if _inside(side, p_turn):
@@ -459,26 +561,51 @@ class CompMixin:
                 midx = p_c1 + oldrad * math.cos(direction)
                 midy = p_c2 + oldrad * math.sin(direction)
                 self.move_endpoint_and_flush(midx, midy)
-            self._enqueue_arc(block.line_number,
-                              ldmath.find_turn(opx, opy, centerx, centery, turn, end_x, end_y),
-                              new_end_x, new_end_y, centerx, centery, turn, end_z, rest)
+            self._enqueue_arc(
+                block.line_number,
+                ldmath.find_turn(opx, opy, centerx, centery, turn, end_x, end_y),
+                new_end_x,
+                new_end_y,
+                centerx,
+                centery,
+                turn,
+                end_z,
+                rest,
+            )
         elif beta > small:
             midx = opx + tool_radius * math.cos(delta)
             midy = opy + tool_radius * math.sin(delta)
             self.dequeue_canons()
-            self._enqueue_arc(block.line_number, 0.0, midx, midy, opx, opy,
-                              -1 if side == LEFT else 1, cz, rest)
+            self._enqueue_arc(
+                block.line_number, 0.0, midx, midy, opx, opy, -1 if side == LEFT else 1, cz, rest
+            )
             self.dequeue_canons()
             self.set_endpoint(midx, midy)
-            self._enqueue_arc(block.line_number,
-                              ldmath.find_turn(opx, opy, centerx, centery, turn, end_x, end_y),
-                              new_end_x, new_end_y, centerx, centery, turn, end_z, rest)
+            self._enqueue_arc(
+                block.line_number,
+                ldmath.find_turn(opx, opy, centerx, centery, turn, end_x, end_y),
+                new_end_x,
+                new_end_y,
+                centerx,
+                centery,
+                turn,
+                end_z,
+                rest,
+            )
         else:
             self.dequeue_canons()
             self.set_endpoint(cx, cy)
-            self._enqueue_arc(block.line_number,
-                              ldmath.find_turn(opx, opy, centerx, centery, turn, end_x, end_y),
-                              new_end_x, new_end_y, centerx, centery, turn, end_z, rest)
+            self._enqueue_arc(
+                block.line_number,
+                ldmath.find_turn(opx, opy, centerx, centery, turn, end_x, end_y),
+                new_end_x,
+                new_end_y,
+                centerx,
+                centery,
+                turn,
+                end_z,
+                rest,
+            )
         self.comp_set_programmed(end_x, end_y, end_z)
         self.comp_set_current(new_end_x, new_end_y, end_z)
         self.current[3:9] = rest
@@ -501,4 +628,5 @@ def _inside_move(side: int, move: int) -> bool:
 def _check_gouge(ratio: float) -> None:
     if ratio > 1.0 or ratio < -1.0:
         raise InterpError(
-            "Arc move in concave corner cannot be reached by the tool without gouging")
+            "Arc move in concave corner cannot be reached by the tool without gouging"
+        )

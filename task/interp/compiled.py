@@ -150,6 +150,7 @@ class Compiler:
         index_fn, counter = self._value(line, counter)
         pars = interp.parameters
         if check_exists:
+
             def exists_numbered() -> float:
                 index = _integer(index_fn())
                 return float(1 <= index < RS274NGC_MAX_PARAMETERS)
@@ -161,8 +162,7 @@ class Compiler:
             if index < 1 or index >= RS274NGC_MAX_PARAMETERS:
                 raise InterpError("Parameter number out of range")
             if 5420 <= index <= 5428 and interp.cutter_comp_side:
-                raise InterpError(
-                    "Cannot read current position with cutter radius compensation on")
+                raise InterpError("Cannot read current position with cutter radius compensation on")
             return pars[index]
 
         return numbered, counter

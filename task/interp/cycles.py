@@ -20,15 +20,33 @@ INVERSE_TIME = 1
 
 # plane -> (index of aa, bb, cc in a 9-axis pose, letters, error texts)
 _PLANES = {
-    C.PLANE_XY: ((0, 1, 2), "xyz", "Z value unspecified in xy plane canned cycle",
-                 "R less than z in cycle in xy plane"),
-    C.PLANE_YZ: ((1, 2, 0), "yzx", "X value unspecified in yz plane canned cycle",
-                 "R less than x in cycle in yz plane"),
-    C.PLANE_XZ: ((2, 0, 1), "zxy", "Y value unspecified in xz plane canned cycle",
-                 "R less than y in cycle in xz plane"),
+    C.PLANE_XY: (
+        (0, 1, 2),
+        "xyz",
+        "Z value unspecified in xy plane canned cycle",
+        "R less than z in cycle in xy plane",
+    ),
+    C.PLANE_YZ: (
+        (1, 2, 0),
+        "yzx",
+        "X value unspecified in yz plane canned cycle",
+        "R less than x in cycle in yz plane",
+    ),
+    C.PLANE_XZ: (
+        (2, 0, 1),
+        "zxy",
+        "Y value unspecified in xz plane canned cycle",
+        "R less than y in cycle in xz plane",
+    ),
 }
-_PLANE_NAMES = {C.PLANE_XY: "XY", C.PLANE_YZ: "YZ", C.PLANE_XZ: "XZ", C.PLANE_UV: "UV",
-                C.PLANE_VW: "VW", C.PLANE_UW: "UW"}
+_PLANE_NAMES = {
+    C.PLANE_XY: "XY",
+    C.PLANE_YZ: "YZ",
+    C.PLANE_XZ: "XZ",
+    C.PLANE_UV: "UV",
+    C.PLANE_VW: "VW",
+    C.PLANE_UW: "UW",
+}
 
 
 class CyclesMixin:
@@ -87,8 +105,11 @@ class CyclesMixin:
             cc = cc_word
             if plane == C.PLANE_XY and (block.radius_flag or block.theta_flag):
                 radius = block.radius if block.radius_flag else ldmath.hypot(cur[1], cur[0])
-                theta = (block.theta * (math.pi / 180.0) if block.theta_flag
-                         else math.atan2(cur[1], cur[0]))
+                theta = (
+                    block.theta * (math.pi / 180.0)
+                    if block.theta_flag
+                    else math.atan2(cur[1], cur[0])
+                )
                 aa = radius * math.cos(theta)
                 bb = radius * math.sin(theta)
             else:
@@ -212,8 +233,9 @@ class CyclesMixin:
                 feed(a, b, cc)
                 traverse(a, b, clear_cc)
             elif motion in (G_74, G_84):
-                self._cycle_tap(motion, a, b, cc, clear_cc, direction, block.p_number, spindle,
-                                tap_feed)
+                self._cycle_tap(
+                    motion, a, b, cc, clear_cc, direction, block.p_number, spindle, tap_feed
+                )
             elif motion == G_85:
                 feed(a, b, cc)
                 feed(a, b, r)
@@ -265,15 +287,19 @@ class CyclesMixin:
             bb = bb + bb_increment
             if radius_increment:
                 if bb == 0 and aa == 0:
-                    raise InterpError("Incremental motion with polar coordinates is "
-                                      "indeterminate when at the origin")
+                    raise InterpError(
+                        "Incremental motion with polar coordinates is "
+                        "indeterminate when at the origin"
+                    )
                 theta = math.atan2(bb, aa)
                 radius = ldmath.hypot(bb, aa) + radius_increment
                 aa, bb = radius * math.cos(theta), radius * math.sin(theta)
             if theta_increment:
                 if bb == 0 and aa == 0:
-                    raise InterpError("Incremental motion with polar coordinates is "
-                                      "indeterminate when at the origin")
+                    raise InterpError(
+                        "Incremental motion with polar coordinates is "
+                        "indeterminate when at the origin"
+                    )
                 theta = math.atan2(bb, aa) + theta_increment
                 radius = ldmath.hypot(bb, aa)
                 aa, bb = radius * math.cos(theta), radius * math.sin(theta)

@@ -146,8 +146,9 @@ class Straight(Segment):
         out.straight_move(self.end)
 
     def offset(self, distance: float) -> None:
-        d = _dv(complex(0.0 * distance, distance) * (self.start - self.end),
-                abs(self.start - self.end))
+        d = _dv(
+            complex(0.0 * distance, distance) * (self.start - self.end), abs(self.start - self.end)
+        )
         self.start += d
         self.end += d
 
@@ -194,10 +195,12 @@ class Round(Segment):
     def on_segment(self, p: complex) -> bool:
         c = self.center
         if self.ccw:
-            return ((_conj(self.start - c) * (p - c)).imag >= -TOLERANCE
-                    and (_conj(self.end - c) * (p - c)).imag <= TOLERANCE)
-        return ((_conj(self.start - c) * (p - c)).imag <= TOLERANCE
-                and (_conj(self.end - c) * (p - c)).imag >= -TOLERANCE)
+            return (_conj(self.start - c) * (p - c)).imag >= -TOLERANCE and (
+                _conj(self.end - c) * (p - c)
+            ).imag <= TOLERANCE
+        return (_conj(self.start - c) * (p - c)).imag <= TOLERANCE and (
+            _conj(self.end - c) * (p - c)
+        ).imag >= -TOLERANCE
 
     def intersection_z(self, x: float, out: list[float]) -> None:
         r = self.start - self.center
@@ -409,8 +412,7 @@ class _Swapped:
         self.out.straight_rapid(self.map(end))
 
     def circular_move(self, ccw: int, center: complex, end: complex) -> None:
-        self.out.circular_move(int(not ccw) if self.flip else ccw, self.map(center),
-                               self.map(end))
+        self.out.circular_move(int(not ccw) if self.flip else ccw, self.map(center), self.map(end))
 
 
 class G7xPath:
@@ -560,8 +562,19 @@ class G7xPath:
             one.segments[-1].draw(swapped)
             passes -= 1
 
-    def do_g71(self, out, cycle: int, x: float, z: float, u: float, w: float, d: float,
-               i: float, r: float, do_rotate: bool = False) -> None:
+    def do_g71(
+        self,
+        out,
+        cycle: int,
+        x: float,
+        z: float,
+        u: float,
+        w: float,
+        d: float,
+        i: float,
+        r: float,
+        do_rotate: bool = False,
+    ) -> None:
         self.segments[0].start = complex(z, x)
         if do_rotate:
             self.rotate()
@@ -605,8 +618,10 @@ class G7xPath:
                     while p < len(segs):
                         if segs[p].climb(loc, out):
                             if cycle == 3:
-                                if (loc[0].imag > self.pocket_starts[-1].imag
-                                        and len(self.pocket_starts) > 1):
+                                if (
+                                    loc[0].imag > self.pocket_starts[-1].imag
+                                    and len(self.pocket_starts) > 1
+                                ):
                                     self.pocket_starts.pop()
                                 if len(self.pocket_starts) == 1:
                                     self.pocket_starts.append(loc[0])
@@ -648,8 +663,9 @@ class G7xPath:
                 x -= self.delta
                 break
 
-    def do_g72(self, out, cycle: int, x: float, z: float, u: float, w: float, d: float,
-               i: float, r: float) -> None:
+    def do_g72(
+        self, out, cycle: int, x: float, z: float, u: float, w: float, d: float, i: float, r: float
+    ) -> None:
         self.do_g71(out, cycle, x, z, u, w, d, i, r, True)
 
 

@@ -148,8 +148,17 @@ from .reader import _DOWNCASE, LINELEN, ReaderMixin, close_and_downcase
 from .tools import ToolsMixin
 
 
-class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, MCodesMixin, OffsetsMixin, MotionMixin,
-                  CyclesMixin, CompMixin, ToolsMixin):
+class Interpreter(
+    ParamsMixin,
+    ReaderMixin,
+    OWordMixin,
+    MCodesMixin,
+    OffsetsMixin,
+    MotionMixin,
+    CyclesMixin,
+    CompMixin,
+    ToolsMixin,
+):
     """LinuxCNC's RS274NGC interpreter, talking to a canon."""
 
     def __init__(self, canon, *, ini=None, parameter_file: str = "", task: int = 0) -> None:
@@ -232,19 +241,33 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, MCodesMixin, OffsetsMixi
             self.origin_index = 1
             pars[5220] = 1.0
         k = 5200 + self.origin_index * 20
-        self.origin_offset = [self.u2p_len(pars[k + 1]), self.u2p_len(pars[k + 2]),
-                              self.u2p_len(pars[k + 3]), pars[k + 4], pars[k + 5], pars[k + 6],
-                              self.u2p_len(pars[k + 7]), self.u2p_len(pars[k + 8]),
-                              self.u2p_len(pars[k + 9])]
+        self.origin_offset = [
+            self.u2p_len(pars[k + 1]),
+            self.u2p_len(pars[k + 2]),
+            self.u2p_len(pars[k + 3]),
+            pars[k + 4],
+            pars[k + 5],
+            pars[k + 6],
+            self.u2p_len(pars[k + 7]),
+            self.u2p_len(pars[k + 8]),
+            self.u2p_len(pars[k + 9]),
+        ]
         canon.SET_G5X_OFFSET(self.origin_index, *self.origin_offset)
         if self.disable_g92_persistence:
             for i in range(5210, 5220):
                 pars[i] = 0.0
         if pars[5210]:
-            self.axis_offset = [self.u2p_len(pars[5211]), self.u2p_len(pars[5212]),
-                                self.u2p_len(pars[5213]), pars[5214], pars[5215], pars[5216],
-                                self.u2p_len(pars[5217]), self.u2p_len(pars[5218]),
-                                self.u2p_len(pars[5219])]
+            self.axis_offset = [
+                self.u2p_len(pars[5211]),
+                self.u2p_len(pars[5212]),
+                self.u2p_len(pars[5213]),
+                pars[5214],
+                pars[5215],
+                pars[5216],
+                self.u2p_len(pars[5217]),
+                self.u2p_len(pars[5218]),
+                self.u2p_len(pars[5219]),
+            ]
         else:
             self.axis_offset = [0.0] * 9
         canon.SET_G92_OFFSET(*self.axis_offset)
@@ -335,8 +358,11 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, MCodesMixin, OffsetsMixi
         self.feature_oword_n_args = get_bool("RS274NGC", "OWORD_NARGS", False)
         self.feature_no_downcase_oword = get_bool("RS274NGC", "NO_DOWNCASE_OWORD", False)
         self.feature_oword_warnonly = get_bool("RS274NGC", "OWORD_WARNONLY", False)
-        for axis, attr in (("AXIS_A", "a_indexer_jnum"), ("AXIS_B", "b_indexer_jnum"),
-                           ("AXIS_C", "c_indexer_jnum")):
+        for axis, attr in (
+            ("AXIS_A", "a_indexer_jnum"),
+            ("AXIS_B", "b_indexer_jnum"),
+            ("AXIS_C", "c_indexer_jnum"),
+        ):
             value = ini.find(axis, "LOCKING_INDEXER_JOINT")
             if value is not None:
                 try:
@@ -365,10 +391,16 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, MCodesMixin, OffsetsMixi
                     break
             self.subroutines = dirs
         for key, attr, default in (
-            ("CENTER_ARC_RADIUS_TOLERANCE_INCH", "center_arc_radius_tolerance_inch",
-             CENTER_ARC_RADIUS_TOLERANCE_INCH),
-            ("CENTER_ARC_RADIUS_TOLERANCE_MM", "center_arc_radius_tolerance_mm",
-             CENTER_ARC_RADIUS_TOLERANCE_MM),
+            (
+                "CENTER_ARC_RADIUS_TOLERANCE_INCH",
+                "center_arc_radius_tolerance_inch",
+                CENTER_ARC_RADIUS_TOLERANCE_INCH,
+            ),
+            (
+                "CENTER_ARC_RADIUS_TOLERANCE_MM",
+                "center_arc_radius_tolerance_mm",
+                CENTER_ARC_RADIUS_TOLERANCE_MM,
+            ),
         ):
             value = ini.find("RS274NGC", key)
             if value is not None:
@@ -403,8 +435,17 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, MCodesMixin, OffsetsMixi
 
     def _u2p_pose(self, values) -> list[float]:
         u = self.u2p_len
-        return [u(values[0]), u(values[1]), u(values[2]), values[3], values[4], values[5],
-                u(values[6]), u(values[7]), u(values[8])]
+        return [
+            u(values[0]),
+            u(values[1]),
+            u(values[2]),
+            values[3],
+            values[4],
+            values[5],
+            u(values[6]),
+            u(values[7]),
+            u(values[8]),
+        ]
 
     # ================================================================= synch
     def synch(self) -> int:
@@ -427,8 +468,9 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, MCodesMixin, OffsetsMixi
         self.feed_hold = canon.GET_EXTERNAL_FEED_HOLD_ENABLE()
         self.speed = [canon.GET_EXTERNAL_SPEED(s) for s in range(NUM_SPINDLES_MAX)]
         self.spindle_turning = [canon.GET_EXTERNAL_SPINDLE(s) for s in range(NUM_SPINDLES_MAX)]
-        self.speed_override = [canon.GET_EXTERNAL_SPINDLE_OVERRIDE_ENABLE(s)
-                               for s in range(NUM_SPINDLES_MAX)]
+        self.speed_override = [
+            canon.GET_EXTERNAL_SPINDLE_OVERRIDE_ENABLE(s) for s in range(NUM_SPINDLES_MAX)
+        ]
         self.spindle_mode = [CONSTANT_RPM] * NUM_SPINDLES_MAX
         self.save_parameters(self.parameter_file or "rs274ngc.var")
         self.load_tool_table()
@@ -454,10 +496,12 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, MCodesMixin, OffsetsMixi
         if self.input_flag:
             if self.input_digital:
                 self.parameters[5399] = canon.GET_EXTERNAL_DIGITAL_INPUT(
-                    self.input_index, int(self.parameters[5399] != 0.0))
+                    self.input_index, int(self.parameters[5399] != 0.0)
+                )
             else:
                 self.parameters[5399] = canon.GET_EXTERNAL_ANALOG_INPUT(
-                    self.input_index, self.parameters[5399])
+                    self.input_index, self.parameters[5399]
+                )
             self.input_flag = False
 
     def set_probe_data(self) -> None:
@@ -466,8 +510,10 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, MCodesMixin, OffsetsMixi
         pars = self.parameters
         for k in range(9):
             value = probe[k]
-            if 3 <= k <= 5 and (self.a_axis_wrapped, self.b_axis_wrapped,
-                                self.c_axis_wrapped)[k - 3]:
+            if (
+                3 <= k <= 5
+                and (self.a_axis_wrapped, self.b_axis_wrapped, self.c_axis_wrapped)[k - 3]
+            ):
                 value = math.fmod(value, 360.0)
                 if value < 0:
                     value += 360.0
@@ -509,7 +555,7 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, MCodesMixin, OffsetsMixi
                 self.file_pos = index
                 raise InterpError("File ended with no percent sign")
             line = lines[index]
-            self.linetext = line[:LINELEN - 1]  # fgets() leaves the raw line there
+            self.linetext = line[: LINELEN - 1]  # fgets() leaves the raw line there
             if len(line) >= LINELEN - 1:
                 self.file_lines = lines
                 self.file_pos = index + 1
@@ -567,12 +613,21 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, MCodesMixin, OffsetsMixi
 
     def _read(self, command: str | None) -> int:
         lines = self.file_lines
-        if command is None and lines is not None and self.file_pos < len(lines) and not (
-                self.probe_flag or self.toolchange_flag or self.input_flag):
+        if (
+            command is None
+            and lines is not None
+            and self.file_pos < len(lines)
+            and not (self.probe_flag or self.toolchange_flag or self.input_flag)
+        ):
             # the common case first: a plain motion line from the file (see _fast_read)
             raw = lines[self.file_pos]
-            if raw[:1] in _FAST_FIRST and len(raw) < LINELEN - 1 and "(" not in raw \
-                    and ";" not in raw and "\x00" not in raw:
+            if (
+                raw[:1] in _FAST_FIRST
+                and len(raw) < LINELEN - 1
+                and "(" not in raw
+                and ";" not in raw
+                and "\x00" not in raw
+            ):
                 text = raw.rstrip(" \t\n\r\f\v")
                 line = text.translate(_DOWNCASE)
                 match = _FAST_LINE.match(line)
@@ -631,11 +686,11 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, MCodesMixin, OffsetsMixi
                 raise InterpError("File ended with no percent sign or program end")
             raw = lines[pos]
             if "\x00" in raw:
-                raw = raw[:raw.index("\x00")]  # C strings end at NUL
+                raw = raw[: raw.index("\x00")]  # C strings end at NUL
             self.file_pos = pos + 1
             self.sequence_number += 1
             if len(raw) >= LINELEN - 1:
-                self.linetext = raw[:LINELEN - 1]
+                self.linetext = raw[: LINELEN - 1]
                 raise InterpError("Command too long")
             raw = raw.rstrip(" \t\n\r\f\v")
             self.linetext = raw
@@ -679,9 +734,13 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, MCodesMixin, OffsetsMixi
             return False
         words = match.groups()[2:]
         if (words[3] is not None or words[4] is not None or words[5] is not None) and (
-                self.a_axis_wrapped or self.b_axis_wrapped or self.c_axis_wrapped
-                or self.a_indexer_jnum != -1 or self.b_indexer_jnum != -1
-                or self.c_indexer_jnum != -1):
+            self.a_axis_wrapped
+            or self.b_axis_wrapped
+            or self.c_axis_wrapped
+            or self.a_indexer_jnum != -1
+            or self.b_indexer_jnum != -1
+            or self.c_indexer_jnum != -1
+        ):
             return False
         ends = list(self.current)
         x, y, z = words[0], words[1], words[2]
@@ -782,9 +841,17 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, MCodesMixin, OffsetsMixi
                 raise InterpError("Cannot specify both polar coordinate and X word")
             if block.y_flag:
                 raise InterpError("Cannot specify both polar coordinate and Y word")
-        axis_flag = (block.x_flag or block.y_flag or block.z_flag or block.a_flag
-                     or block.b_flag or block.c_flag or block.u_flag or block.v_flag
-                     or block.w_flag)
+        axis_flag = (
+            block.x_flag
+            or block.y_flag
+            or block.z_flag
+            or block.a_flag
+            or block.b_flag
+            or block.c_flag
+            or block.u_flag
+            or block.v_flag
+            or block.w_flag
+        )
         polar_flag = block.radius_flag or block.theta_flag
         ijk_flag = block.i_flag or block.j_flag or block.k_flag
         mode0 = block.g_modes[GM_MODAL_0]
@@ -801,9 +868,25 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, MCodesMixin, OffsetsMixi
             else:
                 if covets:
                     raise InterpError("Cannot use two g codes that both use axis values")
-                if (not axis_flag and not polar_flag and mode1 not in (
-                        G_0, G_1, G_2, G_3, G_5_2, G_70, G_71, G_71_1, G_71_2, G_72,
-                        G_72_1, G_72_2)):
+                if (
+                    not axis_flag
+                    and not polar_flag
+                    and mode1
+                    not in (
+                        G_0,
+                        G_1,
+                        G_2,
+                        G_3,
+                        G_5_2,
+                        G_70,
+                        G_71,
+                        G_71_1,
+                        G_71_2,
+                        G_72,
+                        G_72_1,
+                        G_72_2,
+                    )
+                ):
                     raise InterpError("All axes missing with motion code")
             block.motion_to_be = mode1
         elif covets:
@@ -853,7 +936,8 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, MCodesMixin, OffsetsMixi
         elif mode0 == G_5_3:
             if mode1 != G_5_2 and mode1 != -1:
                 raise InterpError(
-                    "Between G5.2 and G5.3 codes, only additional G5.2 codes are allowed.")
+                    "Between G5.2 and G5.3 codes, only additional G5.2 codes are allowed."
+                )
         elif mode0 == G_53:
             if block.motion_to_be not in (G_0, G_1):
                 raise InterpError("Must use g0 or g1 with g53")
@@ -874,46 +958,68 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, MCodesMixin, OffsetsMixi
             raise InterpError("Cannot put a c in canned cycle")
         g7x = motion in (G_70, G_71, G_71_1, G_71_2, G_72, G_72_1, G_72_2)
         if block.d_flag and not (
-                g_modes[7] in (G_41, G_42, G_41_1, G_42_1) or g7x or g_modes[14] == G_96):
+            g_modes[7] in (G_41, G_42, G_41_1, G_42_1) or g7x or g_modes[14] == G_96
+        ):
             raise InterpError(
-                "D word with no G41, G41.1, G42, G42.1, G71, G71.1, G71.2 or G96 to use it")
+                "D word with no G41, G41.1, G42, G42.1, G71, G71.1, G71.2 or G96 to use it"
+            )
         if block.dollar_flag and not (
-                motion in (G_76, G_33, G_33_1, G_95, G_96, G_97) or m_modes[7] in (3, 4, 5, 19)
-                or m_modes[9] == 51 or block.s_flag):
+            motion in (G_76, G_33, G_33_1, G_95, G_96, G_97)
+            or m_modes[7] in (3, 4, 5, 19)
+            or m_modes[9] == 51
+            or block.s_flag
+        ):
             raise InterpError(
                 "$ (spindle selection) word with no M3, M4, M5, M19, M51, G33, G33.1, G76, G95,"
-                " G96 or G97 to use it")
-        if block.e_flag and not (motion in (G_76, G_33, G_33_1, G_70)
-                                 or m_modes[5] in (66, 67, 68)):
+                " G96 or G97 to use it"
+            )
+        if block.e_flag and not (
+            motion in (G_76, G_33, G_33_1, G_70) or m_modes[5] in (66, 67, 68)
+        ):
             raise InterpError("E word with no G70, G76, M66, M67 or M68 to use it")
-        if block.h_flag and not (g_modes[GM_TOOL_LENGTH_OFFSET] in (G_43, G_43_2)
-                                 or motion == G_76):
+        if block.h_flag and not (
+            g_modes[GM_TOOL_LENGTH_OFFSET] in (G_43, G_43_2) or motion == G_76
+        ):
             raise InterpError("H word with no G43 or G76 to use it")
         if block.i_flag and not (
-                motion in (G_2, G_3, 50, 51, G_71, G_71_1, G_71_2, G_72, G_72_1, G_72_2, G_76,
-                           G_87, G_33_1) or g_modes[GM_MODAL_0] == G_10):
+            motion
+            in (G_2, G_3, 50, 51, G_71, G_71_1, G_71_2, G_72, G_72_1, G_72_2, G_76, G_87, G_33_1)
+            or g_modes[GM_MODAL_0] == G_10
+        ):
             raise InterpError("I word with no G2, G3, G5, G5.1, G10, G33.1, G76, or G87 to use it")
-        if block.j_flag and not (motion in (G_2, G_3, 50, 51, G_76, G_87)
-                                 or g_modes[GM_MODAL_0] == G_10):
+        if block.j_flag and not (
+            motion in (G_2, G_3, 50, 51, G_76, G_87) or g_modes[GM_MODAL_0] == G_10
+        ):
             raise InterpError("J word with no G2, G3, G5, G5.1, G10, G76 or G87 to use it")
         if block.k_flag and motion not in (G_2, G_3, G_33, G_33_1, G_76, G_87):
             raise InterpError("K word with no G2, G3, G33, G33.1, G76, or G87 to use it")
         if block.l_number != -1 and not (
-                G_81 <= motion <= G_89 or motion in (G_76, G_5_2, G_73)
-                or g_modes[GM_MODAL_0] == G_10
-                or g_modes[GM_CUTTER_COMP] in (G_41, G_41_1, G_42, G_42_1)
-                or m_modes[5] == 66 or block.o_type == M_98):
-            raise InterpError("L word with no G10, cutter compensation, canned cycle, "
-                              "digital/analog input, M98 or NURBS code")
+            G_81 <= motion <= G_89
+            or motion in (G_76, G_5_2, G_73)
+            or g_modes[GM_MODAL_0] == G_10
+            or g_modes[GM_CUTTER_COMP] in (G_41, G_41_1, G_42, G_42_1)
+            or m_modes[5] == 66
+            or block.o_type == M_98
+        ):
+            raise InterpError(
+                "L word with no G10, cutter compensation, canned cycle, "
+                "digital/analog input, M98 or NURBS code"
+            )
         if block.p_flag:
-            if not (g_modes[GM_MODAL_0] in (G_10, G_4) or g_modes[GM_CONTROL_MODE] == G_64
-                    or motion in (G_76, G_82, G_86, G_88, G_89, 50, G_5_2, G_70, G_2, G_3,
-                                  G_74, G_84)
-                    or m_modes[9] in (50, 51, 52, 53) or m_modes[5] in (62, 63, 64, 65, 66)
-                    or m_modes[7] == 19 or block.user_m == 1 or block.o_type == M_98):
+            if not (
+                g_modes[GM_MODAL_0] in (G_10, G_4)
+                or g_modes[GM_CONTROL_MODE] == G_64
+                or motion in (G_76, G_82, G_86, G_88, G_89, 50, G_5_2, G_70, G_2, G_3, G_74, G_84)
+                or m_modes[9] in (50, 51, 52, 53)
+                or m_modes[5] in (62, 63, 64, 65, 66)
+                or m_modes[7] == 19
+                or block.user_m == 1
+                or block.o_type == M_98
+            ):
                 raise InterpError(
                     "P word with no G2 G3 G4 G10 G64 G5 G5.2 G76 G82 G86 G88 G89"
-                    " or M50 M51 M52 M53 M62 M63 M64 M65 M66 M98 or user M code to use it")
+                    " or M50 M51 M52 M53 M62 M63 M64 M65 M66 M98 or user M code to use it"
+                )
             p_value = round_to_int(block.p_number)
             if (motion in (G_2, G_3) or m_modes[7] == 19) and abs(p_value - block.p_number) > 0.001:
                 raise InterpError("P value not an integer with M19 G2 or G3")
@@ -922,18 +1028,26 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, MCodesMixin, OffsetsMixi
             if motion in (G_2, G_3) and p_value < 1:
                 raise InterpError("P value should be 1 or greater with G2 or G3")
         if block.q_number != -1.0 and not (
-                motion in (G_83, G_73, 50, G_76, G_70, G_71, G_71_1, G_71_2, G_72, G_72_1,
-                           G_72_2)
-                or block.user_m == 1 or m_modes[5] in (66, 67, 68)
-                or g_modes[GM_MODAL_0] == G_10 or m_modes[6] == 61
-                or g_modes[GM_CONTROL_MODE] == G_64 or m_modes[7] == 19):
-            raise InterpError("Q word with no G5, G10, G64, G73, G76, G83, M19, M66, M67, M68 "
-                              "or user M code that uses it")
+            motion in (G_83, G_73, 50, G_76, G_70, G_71, G_71_1, G_71_2, G_72, G_72_1, G_72_2)
+            or block.user_m == 1
+            or m_modes[5] in (66, 67, 68)
+            or g_modes[GM_MODAL_0] == G_10
+            or m_modes[6] == 61
+            or g_modes[GM_CONTROL_MODE] == G_64
+            or m_modes[7] == 19
+        ):
+            raise InterpError(
+                "Q word with no G5, G10, G64, G73, G76, G83, M19, M66, M67, M68 "
+                "or user M code that uses it"
+            )
         if block.r_flag:
-            if not (motion in (G_2, G_3, G_76, G_71, G_71_1, G_71_2, G_72, G_72_1, G_72_2,
-                               G_73, G_74) or G_81 <= motion <= G_89
-                    or g_modes[GM_CUTTER_COMP] in (G_41_1, G_42_1)
-                    or g_modes[GM_MODAL_0] == G_10 or m_modes[7] == 19):
+            if not (
+                motion in (G_2, G_3, G_76, G_71, G_71_1, G_71_2, G_72, G_72_1, G_72_2, G_73, G_74)
+                or G_81 <= motion <= G_89
+                or g_modes[GM_CUTTER_COMP] in (G_41_1, G_42_1)
+                or g_modes[GM_MODAL_0] == G_10
+                or m_modes[7] == 19
+            ):
                 raise InterpError("R word with no g code that uses it")
             if m_modes[7] == 19 and (block.r_number > 360.0 or block.r_number < 0.0):
                 raise InterpError("R value must be within 0..360 with M19")
@@ -1048,7 +1162,7 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, MCodesMixin, OffsetsMixi
             self._expand_param_comment(comment, out)
         except InterpError:
             done = "".join(out)
-            self._last_expansion = done + self._last_expansion[len(done):]
+            self._last_expansion = done + self._last_expansion[len(done) :]
             return self._last_expansion
         self._last_expansion = "".join(out)
         return self._last_expansion
@@ -1138,8 +1252,9 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, MCodesMixin, OffsetsMixi
                     self._enq("SET_SPINDLE_MODE", s, 0.0)
                 else:
                     self.spindle_mode[s] = CONSTANT_SURFACE
-                    self._enq("SET_SPINDLE_MODE", s,
-                              abs(block.d_number_float) if block.d_flag else 1e30)
+                    self._enq(
+                        "SET_SPINDLE_MODE", s, abs(block.d_number_float) if block.d_flag else 1e30
+                    )
 
     def convert_feed_mode(self, g_code: int) -> None:
         if g_code == G_93:
@@ -1186,14 +1301,20 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, MCodesMixin, OffsetsMixi
         if g[GM_DISTANCE_MODE] != -1:
             mode = MODE_ABSOLUTE if g[GM_DISTANCE_MODE] == G_90 else MODE_INCREMENTAL
             if mode != self.distance_mode:
-                self._enq("COMMENT", "interpreter: distance mode changed to "
-                          + ("absolute" if mode == MODE_ABSOLUTE else "incremental"))
+                self._enq(
+                    "COMMENT",
+                    "interpreter: distance mode changed to "
+                    + ("absolute" if mode == MODE_ABSOLUTE else "incremental"),
+                )
                 self.distance_mode = mode
         if g[GM_IJK_DISTANCE_MODE] != -1:
             mode = MODE_ABSOLUTE if g[GM_IJK_DISTANCE_MODE] == G_90_1 else MODE_INCREMENTAL
             if mode != self.ijk_distance_mode:
-                self._enq("COMMENT", "interpreter: IJK distance mode changed to "
-                          + ("absolute" if mode == MODE_ABSOLUTE else "incremental"))
+                self._enq(
+                    "COMMENT",
+                    "interpreter: IJK distance mode changed to "
+                    + ("absolute" if mode == MODE_ABSOLUTE else "incremental"),
+                )
                 self.ijk_distance_mode = mode
         if g[GM_RETRACT_MODE] != -1:
             if self.cutter_comp_side:
@@ -1215,14 +1336,22 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, MCodesMixin, OffsetsMixi
     def convert_set_plane(self, g_code: int) -> None:
         side = self.cutter_comp_side
         if side:
-            if ((g_code == G_17 and self.plane != C.PLANE_XY)
-                    or (g_code == G_18 and self.plane != C.PLANE_XZ)
-                    or (g_code == G_19 and self.plane != C.PLANE_YZ)):
+            if (
+                (g_code == G_17 and self.plane != C.PLANE_XY)
+                or (g_code == G_18 and self.plane != C.PLANE_XZ)
+                or (g_code == G_19 and self.plane != C.PLANE_YZ)
+            ):
                 raise InterpError("Cannot change planes with cutter radius compensation on")
             if g_code == G_19:
                 raise InterpError("Cutter radius compensation allowed only in XY, XZ planes")
-        plane = {G_17: C.PLANE_XY, G_18: C.PLANE_XZ, G_19: C.PLANE_YZ, G_17_1: C.PLANE_UV,
-                 G_18_1: C.PLANE_UW, G_19_1: C.PLANE_VW}[g_code]
+        plane = {
+            G_17: C.PLANE_XY,
+            G_18: C.PLANE_XZ,
+            G_19: C.PLANE_YZ,
+            G_17_1: C.PLANE_UV,
+            G_18_1: C.PLANE_UW,
+            G_19_1: C.PLANE_VW,
+        }[g_code]
         self.canon.SELECT_PLANE(plane)
         self.plane = plane
 
@@ -1286,8 +1415,11 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, MCodesMixin, OffsetsMixi
 
     def convert_cutter_compensation_off(self) -> None:
         self._enq("COMMENT", "interpreter: cutter radius compensation off")
-        if self.cutter_comp_side and self.cutter_comp_radius > 0.0 and \
-                not self.cutter_comp_firstmove:
+        if (
+            self.cutter_comp_side
+            and self.cutter_comp_radius > 0.0
+            and not self.cutter_comp_firstmove
+        ):
             cx, cy, _ = self.comp_get_current()
             self.move_endpoint_and_flush(cx, cy)
             self.dequeue_canons()
@@ -1332,8 +1464,10 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, MCodesMixin, OffsetsMixi
         if radius < 0.0:
             radius = -radius
             side = LEFT if side == RIGHT else RIGHT
-        self._enq("COMMENT", "interpreter: cutter radius compensation on "
-                  + ("right" if side == RIGHT else "left"))
+        self._enq(
+            "COMMENT",
+            "interpreter: cutter radius compensation on " + ("right" if side == RIGHT else "left"),
+        )
         self.cutter_comp_radius = radius
         self.cutter_comp_orientation = orientation
         self.cutter_comp_side = side
@@ -1365,8 +1499,9 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, MCodesMixin, OffsetsMixi
     # ================================================================= stop
     def convert_stop(self, block: Block) -> int:
         canon = self.canon
-        cx, cy, _ = self.comp_get_current() if self.plane in (C.PLANE_XY, C.PLANE_XZ) else \
-            (0.0, 0.0, 0.0)
+        cx, cy, _ = (
+            self.comp_get_current() if self.plane in (C.PLANE_XY, C.PLANE_XZ) else (0.0, 0.0, 0.0)
+        )
         self.move_endpoint_and_flush(cx, cy)
         self.dequeue_canons()
         m4 = block.m_modes[4]
@@ -1483,20 +1618,17 @@ class Interpreter(ParamsMixin, ReaderMixin, OWordMixin, MCodesMixin, OffsetsMixi
                 self._file_cache[filename] = lines
         return lines
 
+
 # A line of nothing but an optional N word, an optional G0/G1 and plain-number axis words in
 # XYZABC order (other lines take the general path).
 _NUM = r"([-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+))"
 _FAST_LINE = re.compile(
-    r"(?:n(\d+))?(?:g0*([01])(?![0-9.]))?(?=[xyzabc])" + "".join(
-        f"(?:{letter}{_NUM})?" for letter in "xyzabc") + r"\Z")
+    r"(?:n(\d+))?(?:g0*([01])(?![0-9.]))?(?=[xyzabc])"
+    + "".join(f"(?:{letter}{_NUM})?" for letter in "xyzabc")
+    + r"\Z"
+)
 _EMPTY_BLOCK = Block()  # stands for blank lines; never executed
 _FAST_FIRST = frozenset("nNgGxXyYzZaAbBcC")
-
-
-
-
-
-
 
 
 def _realpath(path: str, base: str) -> str:

@@ -76,8 +76,9 @@ def sinl(value) -> float:
     return float(_np()[0].sin(value))
 
 
-def find_turn(x1: float, y1: float, center_x: float, center_y: float, turn: int, x2: float,
-              y2: float) -> float:
+def find_turn(
+    x1: float, y1: float, center_x: float, center_y: float, turn: int, x2: float, y2: float
+) -> float:
     """LinuxCNC's find_turn: the swept angle, with its long double 2*pi steps."""
     import math
 

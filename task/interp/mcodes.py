@@ -62,26 +62,34 @@ class MCodesMixin:
         if m5 != -1:
             if m5 in (62, 63, 64, 65):
                 if self.cutter_comp_side:
-                    raise InterpError({
-                        62: "Cannot set motion output with cutter radius compensation on",
-                        63: "Cannot set motion digital output with cutter radius compensation on",
-                        64: "Cannot set auxiliary digital output with cutter radius compensation"
+                    raise InterpError(
+                        {
+                            62: "Cannot set motion output with cutter radius compensation on",
+                            63: "Cannot set motion digital output with cutter radius compensation on",
+                            64: "Cannot set auxiliary digital output with cutter radius compensation"
                             " on",
-                        65: "Cannot set auxiliary digital output with cutter radius compensation"
-                            " on"}[m5])
+                            65: "Cannot set auxiliary digital output with cutter radius compensation"
+                            " on",
+                        }[m5]
+                    )
                 if not block.p_flag:
                     raise InterpError(f"No valid P word with M{m5}")
                 index = round_to_int(block.p_number)
-                {62: canon.SET_MOTION_OUTPUT_BIT, 63: canon.CLEAR_MOTION_OUTPUT_BIT,
-                 64: canon.SET_AUX_OUTPUT_BIT, 65: canon.CLEAR_AUX_OUTPUT_BIT}[m5](index)
+                {
+                    62: canon.SET_MOTION_OUTPUT_BIT,
+                    63: canon.CLEAR_MOTION_OUTPUT_BIT,
+                    64: canon.SET_AUX_OUTPUT_BIT,
+                    65: canon.CLEAR_AUX_OUTPUT_BIT,
+                }[m5](index)
             elif m5 == 66:
                 self.convert_m66(block)
             elif m5 in (67, 68):
                 if self.cutter_comp_side:
                     raise InterpError(
                         "Cannot set motion analog output with cutter radius compensation on"
-                        if m5 == 67 else
-                        "Cannot set auxiliary analog output with cutter radius compensation on")
+                        if m5 == 67
+                        else "Cannot set auxiliary analog output with cutter radius compensation on"
+                    )
                 if not block.e_flag or round_to_int(block.e_number) < 0:
                     raise InterpError(f"Invalid analog index with M{m5}")
                 func = canon.SET_MOTION_OUTPUT_VALUE if m5 == 67 else canon.SET_AUX_OUTPUT_VALUE
@@ -104,9 +112,13 @@ class MCodesMixin:
                 if block.dollar_number >= self.num_spindles or block.dollar_number < -1:
                     raise InterpError(
                         f"Spindle ($) number out of range in M{m7} Command\nnum_spindles "
-                        f"={self.num_spindles}. $={int(block.dollar_number)}\n")
-                spindles = (range(self.num_spindles) if block.dollar_number == -1
-                            else [int(block.dollar_number)])
+                        f"={self.num_spindles}. $={int(block.dollar_number)}\n"
+                    )
+                spindles = (
+                    range(self.num_spindles)
+                    if block.dollar_number == -1
+                    else [int(block.dollar_number)]
+                )
             else:
                 spindles = [0]
             for s in spindles:
@@ -122,15 +134,18 @@ class MCodesMixin:
         elif m7 == 19:
             for s in range(self.num_spindles):
                 self.spindle_turning[s] = C.STOPPED
-            if block.dollar_flag and (block.dollar_number >= self.num_spindles
-                                      or block.dollar_number < 0):
+            if block.dollar_flag and (
+                block.dollar_number >= self.num_spindles or block.dollar_number < 0
+            ):
                 raise InterpError("Spindle ($) number out of range in M19 Command")
             spindle = int(block.dollar_number) if block.dollar_flag else 0
             if block.r_flag or block.p_flag:
-                self._enq("ORIENT_SPINDLE", spindle,
-                          (block.r_number + self.orient_offset) if block.r_flag
-                          else self.orient_offset,
-                          int(block.p_number) if block.p_flag else 0)
+                self._enq(
+                    "ORIENT_SPINDLE",
+                    spindle,
+                    (block.r_number + self.orient_offset) if block.r_flag else self.orient_offset,
+                    int(block.p_number) if block.p_flag else 0,
+                )
             if block.q_flag:
                 if block.q_number <= 0.0:
                     raise InterpError("Q word with M19 requires a value > 0")
@@ -154,7 +169,8 @@ class MCodesMixin:
             if self.cutter_comp_side:
                 raise InterpError(
                     f"Cannot {'enable' if m9 == 48 else 'disable'} overrides with cutter "
-                    "radius compensation on")
+                    "radius compensation on"
+                )
             if m9 == 48:
                 canon.ENABLE_FEED_OVERRIDE()
                 self.feed_override = True
@@ -178,7 +194,8 @@ class MCodesMixin:
             if self.cutter_comp_side:
                 raise InterpError(
                     f"Cannot {'enable' if on else 'disable'} overrides with cutter radius "
-                    "compensation on")
+                    "compensation on"
+                )
             if m9 == 50:
                 (canon.ENABLE_FEED_OVERRIDE if on else canon.DISABLE_FEED_OVERRIDE)()
                 self.feed_override = on
@@ -194,8 +211,7 @@ class MCodesMixin:
                 (canon.ENABLE_FEED_HOLD if on else canon.DISABLE_FEED_HOLD)()
                 self.feed_hold = on
         m10 = block.m_modes[10]
-        if m10 != -1 and not canon.USER_DEFINED_FUNCTION(m10, block.p_number,
-                                                         block.q_number):
+        if m10 != -1 and not canon.USER_DEFINED_FUNCTION(m10, block.p_number, block.q_number):
             raise InterpError(f"Unknown m code used: M{m10}")
 
     def convert_m66(self, block: Block) -> None:
@@ -205,18 +221,20 @@ class MCodesMixin:
             raise InterpError("Zero timeout with wait type != immediate return")
         if block.e_flag and block.l_flag and round_to_int(block.l_number) != 0:
             raise InterpError("Can't select analog input with wait type != immediate return")
-        if ((block.p_flag and round_to_int(block.p_number) < 0)
-                or (block.e_flag and round_to_int(block.e_number) < 0)
-                or (not block.p_flag and not block.e_flag)):
+        if (
+            (block.p_flag and round_to_int(block.p_number) < 0)
+            or (block.e_flag and round_to_int(block.e_number) < 0)
+            or (not block.p_flag and not block.e_flag)
+        ):
             raise InterpError("Need to have either a valid P or a valid E word with M66")
         if block.p_flag:
             wait_type = round_to_int(block.l_number) if block.l_flag else 0
             timeout = block.q_number if block.q_number > 0 else 0.0
             if self.cutter_comp_side:
                 raise InterpError(
-                    "Cannot wait for digital input with cutter radius compensation on")
-            ret = self.canon.WAIT(round_to_int(block.p_number), C.DIGITAL_INPUT, wait_type,
-                                  timeout)
+                    "Cannot wait for digital input with cutter radius compensation on"
+                )
+            ret = self.canon.WAIT(round_to_int(block.p_number), C.DIGITAL_INPUT, wait_type, timeout)
             if ret == -1:
                 raise InterpError("Digital input selected out of bounds")
             if ret == 0:
@@ -225,8 +243,7 @@ class MCodesMixin:
                 self.input_digital = True
         elif round_to_int(block.e_number) >= 0:
             if self.cutter_comp_side:
-                raise InterpError(
-                    "Cannot wait for analog input with cutter radius compensation on")
+                raise InterpError("Cannot wait for analog input with cutter radius compensation on")
             ret = self.canon.WAIT(round_to_int(block.e_number), C.ANALOG_INPUT, 0, 0)
             if ret == -1:
                 raise InterpError("Analog input selected out of bounds")
@@ -248,26 +265,45 @@ class MCodesMixin:
         else:
             if not frame.context_status & CONTEXT_VALID:
                 raise InterpError(
-                    "Cannot restore context from invalid stack frame - missing M70/M73?")
+                    "Cannot restore context from invalid stack frame - missing M70/M73?"
+                )
             self.restore_settings(self.call_level)
 
     def active_g_codes(self) -> list[int]:
-        plane = {C.PLANE_XY: G_17, C.PLANE_XZ: G_18, C.PLANE_YZ: G_19, C.PLANE_UV: G_17_1,
-                 C.PLANE_UW: G_18_1, C.PLANE_VW: G_19_1}.get(self.plane, 0)
+        plane = {
+            C.PLANE_XY: G_17,
+            C.PLANE_XZ: G_18,
+            C.PLANE_YZ: G_19,
+            C.PLANE_UV: G_17_1,
+            C.PLANE_UW: G_18_1,
+            C.PLANE_VW: G_19_1,
+        }.get(self.plane, 0)
         o = self.origin_index
         return [
-            self.sequence_number, self.motion_mode, -1, plane,
-            G_42 if self.cutter_comp_side == RIGHT else G_41 if self.cutter_comp_side == LEFT
+            self.sequence_number,
+            self.motion_mode,
+            -1,
+            plane,
+            G_42
+            if self.cutter_comp_side == RIGHT
+            else G_41
+            if self.cutter_comp_side == LEFT
             else G_40,
             G_20 if self.length_units == C.UNITS_INCHES else G_21,
             G_90 if self.distance_mode == MODE_ABSOLUTE else G_91,
-            G_93 if self.feed_mode == INVERSE_TIME else G_94
-            if self.feed_mode == UNITS_PER_MINUTE else G_95,
+            G_93
+            if self.feed_mode == INVERSE_TIME
+            else G_94
+            if self.feed_mode == UNITS_PER_MINUTE
+            else G_95,
             530 + 10 * o if o < 7 else 584 + o,
             G_43 if any(self.tool_offset) else G_49,
             G_98 if self.retract_mode == OLD_Z else G_99,
-            G_64 if self.control_mode == C.CONTINUOUS else G_61
-            if self.control_mode == C.EXACT_PATH else G_61_1,
+            G_64
+            if self.control_mode == C.CONTINUOUS
+            else G_61
+            if self.control_mode == C.EXACT_PATH
+            else G_61_1,
             -1,
             G_97 if self.spindle_mode[0] == CONSTANT_RPM else G_96,
             G_90_1 if self.ijk_distance_mode == MODE_ABSOLUTE else G_91_1,
@@ -278,7 +314,8 @@ class MCodesMixin:
     def active_m_codes(self) -> list[int]:
         turning = self.spindle_turning[0]
         return [
-            self.sequence_number, -1,
+            self.sequence_number,
+            -1,
             5 if turning == C.STOPPED else 3 if turning == C.CLOCKWISE else 4,
             -1,
             7 if self.mist else -1 if self.flood else 9,
@@ -290,8 +327,13 @@ class MCodesMixin:
         ]
 
     def active_settings(self) -> list[float]:
-        return [float(self.sequence_number), self.feed_rate, self.speed[0], self.tolerance,
-                self.naivecam_tolerance]
+        return [
+            float(self.sequence_number),
+            self.feed_rate,
+            self.speed[0],
+            self.tolerance,
+            self.naivecam_tolerance,
+        ]
 
     def save_settings(self) -> None:
         frame = self.sub_context[self.call_level]
@@ -303,11 +345,13 @@ class MCodesMixin:
         frame = self.sub_context[from_level]
         current_g = self.active_g_codes()
         if current_g[5] != frame.saved_g_codes[5]:
-            self._execute_restore(f"G{frame.saved_g_codes[5] // 10}",
-                                  "M7x: restore_settings G20/G21 failed: ''")
+            self._execute_restore(
+                f"G{frame.saved_g_codes[5] // 10}", "M7x: restore_settings G20/G21 failed: ''"
+            )
             current_g = self.active_g_codes()
-        cmd = _gen_settings(current_g, frame.saved_g_codes, self.active_settings(),
-                            frame.saved_settings)
+        cmd = _gen_settings(
+            current_g, frame.saved_g_codes, self.active_settings(), frame.saved_settings
+        )
         cmd += _gen_m_codes(self.active_m_codes(), frame.saved_m_codes)
         for part in cmd.split("\n"):
             if part:

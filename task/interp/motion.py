@@ -67,8 +67,14 @@ class MotionMixin:
             for flag, letter in ((ai, "A"), (bi, "B"), (ci, "C")):
                 if flag:
                     raise InterpError(f"Indexing axis {letter} can only be moved with G0")
-        xyz = (block.x_flag or block.y_flag or block.z_flag or block.u_flag or block.v_flag
-               or block.w_flag)
+        xyz = (
+            block.x_flag
+            or block.y_flag
+            or block.z_flag
+            or block.u_flag
+            or block.v_flag
+            or block.w_flag
+        )
         if ai and (xyz or block.b_flag or block.c_flag):
             raise InterpError("Indexing axis A can only be moved alone")
         if bi and (xyz or block.a_flag or block.c_flag):
@@ -78,8 +84,13 @@ class MotionMixin:
         if not is_a_cycle(motion):
             self.cycle_il_flag = False
         if ai or bi or ci:
-            axis, jnum = ((3, self.a_indexer_jnum) if ai else (4, self.b_indexer_jnum) if bi
-                          else (5, self.c_indexer_jnum))
+            axis, jnum = (
+                (3, self.a_indexer_jnum)
+                if ai
+                else (4, self.b_indexer_jnum)
+                if bi
+                else (5, self.c_indexer_jnum)
+            )
             ends = self.find_ends(block)
             self.issue_straight_index(axis, jnum, ends[axis], block.line_number)
         elif motion in (G_0, G_1, G_33, G_33_1, G_76):
@@ -138,14 +149,13 @@ class MotionMixin:
             if block.dollar_flag:
                 if block.dollar_number < 0 or block.dollar_number >= self.num_spindles:
                     raise InterpError(
-                        f"Invalid spindle ($) number in {'G33' if move == G_33 else 'G33.1'}"
-                        " move")
+                        f"Invalid spindle ($) number in {'G33' if move == G_33 else 'G33.1'} move"
+                    )
                 self.active_spindle = int(block.dollar_number)
-            if self.spindle_turning[self.active_spindle] not in (C.CLOCKWISE,
-                                                                 C.COUNTERCLOCKWISE):
+            if self.spindle_turning[self.active_spindle] not in (C.CLOCKWISE, C.COUNTERCLOCKWISE):
                 raise InterpError(
-                    "Spindle not turning in G33" if move == G_33
-                    else "Spindle not turning in G33.1")
+                    "Spindle not turning in G33" if move == G_33 else "Spindle not turning in G33.1"
+                )
             canon.START_SPEED_FEED_SYNCH(self.active_spindle, block.k_number, False)
             if move == G_33:
                 canon.STRAIGHT_FEED(block.line_number, *ends)
@@ -164,10 +174,8 @@ class MotionMixin:
                 if block.dollar_number < 0 or block.dollar_number >= self.num_spindles:
                     raise InterpError("Invalid D-number in G76 cycle")
                 self.active_spindle = int(block.dollar_number)
-            if self.spindle_turning[self.active_spindle] not in (C.CLOCKWISE,
-                                                                 C.COUNTERCLOCKWISE):
-                raise InterpError(
-                    f"Chosen spindle ({self.active_spindle}) not turning in G76")
+            if self.spindle_turning[self.active_spindle] not in (C.CLOCKWISE, C.COUNTERCLOCKWISE):
+                raise InterpError(f"Chosen spindle ({self.active_spindle}) not turning in G76")
             if ends[3:9] != self.current[3:9]:
                 raise InterpError("Cannot move rotary axes with G76")
             self.convert_threading_cycle(block, ends)
@@ -213,8 +221,11 @@ class MotionMixin:
         taper_dist = block.e_number if block.e_flag else 0.0
         if taper_dist < 0.0:
             taper_dist = 0.0
-        taper_pitch = (pitch * ldmath.hypot(taper_dist, full_threadheight) / taper_dist
-                       if taper_dist > 0.0 else pitch)
+        taper_pitch = (
+            pitch * ldmath.hypot(taper_dist, full_threadheight) / taper_dist
+            if taper_dist > 0.0
+            else pitch
+        )
         if end_z > start_z:
             taper_dist = -taper_dist
         taper_flags = max(block.l_number, 0)
@@ -224,8 +235,21 @@ class MotionMixin:
         passes = 1
         depth = start_depth
         zoff = (depth - full_dia_depth) * math.tan(compound)
-        args = (block, boring, safe_x, end_depth, start_y, start_z, taper_dist, entry_taper,
-                exit_taper, taper_pitch, pitch, full_threadheight, target_z)
+        args = (
+            block,
+            boring,
+            safe_x,
+            end_depth,
+            start_y,
+            start_z,
+            taper_dist,
+            entry_taper,
+            exit_taper,
+            taper_pitch,
+            pitch,
+            full_threadheight,
+            target_z,
+        )
         while depth < end_depth:
             self._threading_pass(depth, zoff, *args)
             passes += 1
@@ -239,9 +263,24 @@ class MotionMixin:
         self.canon.STRAIGHT_TRAVERSE(block.line_number, end_x, end_y, end_z, *cur[3:9])
         cur[0], cur[1], cur[2] = end_x, end_y, end_z
 
-    def _threading_pass(self, depth, zoff, block, boring, safe_x, end_depth, start_y, start_z,
-                        taper_dist, entry_taper, exit_taper, taper_pitch, pitch,
-                        full_threadheight, target_z) -> None:
+    def _threading_pass(
+        self,
+        depth,
+        zoff,
+        block,
+        boring,
+        safe_x,
+        end_depth,
+        start_y,
+        start_z,
+        taper_dist,
+        entry_taper,
+        exit_taper,
+        taper_pitch,
+        pitch,
+        full_threadheight,
+        target_z,
+    ) -> None:
         canon = self.canon
         line = block.line_number
         rest = self.current[3:9]
@@ -254,8 +293,9 @@ class MotionMixin:
         if taper_dist and entry_taper:
             canon.DISABLE_FEED_OVERRIDE()
             canon.START_SPEED_FEED_SYNCH(spindle, taper_pitch, False)
-            canon.STRAIGHT_FEED(line, x_at(depth - full_threadheight), start_y, start_z - zoff,
-                                *rest)
+            canon.STRAIGHT_FEED(
+                line, x_at(depth - full_threadheight), start_y, start_z - zoff, *rest
+            )
             canon.STRAIGHT_FEED(line, x_at(depth), start_y, start_z - zoff - taper_dist, *rest)
             canon.START_SPEED_FEED_SYNCH(spindle, pitch, False)
         else:
@@ -265,8 +305,9 @@ class MotionMixin:
         if taper_dist and exit_taper:
             canon.STRAIGHT_FEED(line, x_at(depth), start_y, target_z - zoff + taper_dist, *rest)
             canon.START_SPEED_FEED_SYNCH(spindle, taper_pitch, False)
-            canon.STRAIGHT_FEED(line, x_at(depth - full_threadheight), start_y, target_z - zoff,
-                                *rest)
+            canon.STRAIGHT_FEED(
+                line, x_at(depth - full_threadheight), start_y, target_z - zoff, *rest
+            )
         else:
             canon.STRAIGHT_FEED(line, x_at(depth), start_y, target_z - zoff, *rest)
         canon.STOP_SPEED_FEED_SYNCH()
@@ -283,7 +324,8 @@ class MotionMixin:
         cycle //= 10
         if self.cutter_comp_side and cycle != 70:
             raise InterpError(
-                f"G{cycle}.{subcycle} cannot be used with cutter compensation enabled")
+                f"G{cycle}.{subcycle} cannot be used with cutter compensation enabled"
+            )
         if self.plane != C.PLANE_XZ:
             raise InterpError(f"G{cycle}.{subcycle} can only be used in XZ plane (G18)")
         saved_distance, saved_ijk = self.distance_mode, self.ijk_distance_mode
@@ -315,8 +357,10 @@ class MotionMixin:
         else:
             x = block.x_number if block.x_flag else x
             z = block.z_number if block.z_flag else z
-        words = {k: (getattr(block, k + "_flag"), getattr(block, k + "_number"))
-                 for k in ("e", "i", "r", "u", "w")}
+        words = {
+            k: (getattr(block, k + "_flag"), getattr(block, k + "_number"))
+            for k in ("e", "i", "r", "u", "w")
+        }
         words["d"] = (block.d_flag, block.d_number_float)
         words["p"] = (block.p_flag, block.p_number)
         self.convert_straight(G_0, block)
@@ -378,8 +422,7 @@ class MotionMixin:
                         center = center + d if mode == G_3 else center - d
                     else:
                         if not blk.i_flag and not blk.k_flag:
-                            raise InterpError(
-                                "G7X error: either I or K must be present for arc")
+                            raise InterpError("G7X error: either I or K must be present for arc")
                         if ijk_mode == MODE_INCREMENTAL:
                             center += start
                     path.segments.append(Round(int(mode == G_3), start, center, end))
@@ -447,8 +490,7 @@ class MotionMixin:
             if not block.p_flag or not block.q_flag:
                 raise InterpError("Must specify both P and Q with G5")
             x2, y2 = ends[0] + block.p_number, ends[1] + block.q_number
-            points = [(cur[0], cur[1], 1.0), (x1, y1, 1.0), (x2, y2, 1.0),
-                      (ends[0], ends[1], 1.0)]
+            points = [(cur[0], cur[1], 1.0), (x1, y1, 1.0), (x2, y2, 1.0), (ends[0], ends[1], 1.0)]
             self.canon.NURBS_FEED(block.line_number, points, 4)
             self.cycle_i = -block.p_number
             self.cycle_j = -block.q_number
@@ -482,8 +524,10 @@ class MotionMixin:
             if self.motion_mode != G_5_2:
                 raise InterpError("Cannot use G5.3 without G5.2 first")
             if len(points) < self.nurbs_order:
-                raise InterpError("You must specify a number of control points at least equal "
-                                  f"to the order L = {self.nurbs_order}")
+                raise InterpError(
+                    "You must specify a number of control points at least equal "
+                    f"to the order L = {self.nurbs_order}"
+                )
             self.current[0], self.current[1] = points[-1][0], points[-1][1]
             self.canon.NURBS_FEED(block.line_number, list(points), self.nurbs_order)
             points.clear()
@@ -491,8 +535,11 @@ class MotionMixin:
 
     def inverse_time_rate_straight(self, ends: list[float], block: Block) -> None:
         cur = list(self.current)
-        if self.cutter_comp_side and self.cutter_comp_radius > 0.0 and \
-                not self.cutter_comp_firstmove:
+        if (
+            self.cutter_comp_side
+            and self.cutter_comp_radius > 0.0
+            and not self.cutter_comp_firstmove
+        ):
             cur[0], cur[1], cur[2] = self.program_x, self.program_y, self.program_z
         length = _straight_length(ends, cur)
         rate = max(0.1, length * block.f_number)
@@ -520,8 +567,9 @@ class MotionMixin:
     # =================================================================== arcs
     def convert_arc(self, move: int, block: Block) -> None:
         if self.arc_not_allowed:
-            raise InterpError("The move just after exiting cutter compensation mode must be "
-                              "straight, not an arc")
+            raise InterpError(
+                "The move just after exiting cutter compensation mode must be straight, not an arc"
+            )
         ijk_flag = block.i_flag or block.j_flag or block.k_flag
         plane = self.plane
         if plane in (C.PLANE_UV, C.PLANE_VW, C.PLANE_UW):
@@ -596,34 +644,76 @@ class MotionMixin:
         current1, current2, current3 = cur[a1], cur[a2], cur[a3]
         end1, end2, end3 = ends[a1], ends[a2], ends[a3]
         inch = self.length_units == C.UNITS_INCHES
-        spiral_abs = (self.center_arc_radius_tolerance_inch if inch
-                      else self.center_arc_radius_tolerance_mm)
+        spiral_abs = (
+            self.center_arc_radius_tolerance_inch if inch else self.center_arc_radius_tolerance_mm
+        )
         radius_tol = RADIUS_TOLERANCE_INCH if inch else RADIUS_TOLERANCE_MM
         p_number = round_to_int(block.p_number) if block.p_flag else 1
         if block.r_flag:
-            center1, center2, turn = self.arc_data_r(move, current1, current2, end1, end2,
-                                                     block.r_number, p_number, radius_tol)
+            center1, center2, turn = self.arc_data_r(
+                move, current1, current2, end1, end2, block.r_number, p_number, radius_tol
+            )
         else:
             center1, center2, turn = self.arc_data_ijk(
-                move, current1, current2, end1, end2,
-                self.ijk_distance_mode == MODE_ABSOLUTE, offsets[0], offsets[1], p_number,
-                radius_tol, spiral_abs, SPIRAL_RELATIVE_TOLERANCE)
+                move,
+                current1,
+                current2,
+                end1,
+                end2,
+                self.ijk_distance_mode == MODE_ABSOLUTE,
+                offsets[0],
+                offsets[1],
+                p_number,
+                radius_tol,
+                spiral_abs,
+                SPIRAL_RELATIVE_TOLERANCE,
+            )
         if self.feed_mode == INVERSE_TIME:
-            length = _arc_length(current1, current2, current3, center1, center2, turn, end1,
-                                 end2, end3)
+            length = _arc_length(
+                current1, current2, current3, center1, center2, turn, end1, end2, end3
+            )
             rate = max(0.1, length * block.f_number)
             self._enq("SET_FEED_RATE", rate)
             self.feed_rate = rate
-        self.canon.ARC_FEED(block.line_number, end1, end2, center1, center2, turn, end3,
-                            ends[3], ends[4], ends[5], ends[6], ends[7], ends[8])
+        self.canon.ARC_FEED(
+            block.line_number,
+            end1,
+            end2,
+            center1,
+            center2,
+            turn,
+            end3,
+            ends[3],
+            ends[4],
+            ends[5],
+            ends[6],
+            ends[7],
+            ends[8],
+        )
         self.current = list(ends)
 
     def _arc_axis_names(self) -> tuple[str, str]:
         return {C.PLANE_XY: ("X", "Y"), C.PLANE_XZ: ("Z", "X"), C.PLANE_YZ: ("Y", "Z")}.get(
-            self.plane, ("!", "!"))
+            self.plane, ("!", "!")
+        )
 
-    def arc_data_ijk(self, move, cx, cy, ex, ey, absolute, i, j, p_number, radius_tol,
-                     spiral_abs, spiral_rel, comp_side=0, tool_radius=0.0):
+    def arc_data_ijk(
+        self,
+        move,
+        cx,
+        cy,
+        ex,
+        ey,
+        absolute,
+        i,
+        j,
+        p_number,
+        radius_tol,
+        spiral_abs,
+        spiral_rel,
+        comp_side=0,
+        tool_radius=0.0,
+    ):
         a, b = self._arc_axis_names()
         if absolute:
             center_x, center_y = i, j
@@ -635,7 +725,8 @@ class MotionMixin:
             raise InterpError(
                 f"Zero-radius arc: start=({a}{cx:.4f},{b}{cy:.4f}) center=({a}{center_x:.4f},"
                 f"{b}{center_y:.4f}) end=({a}{ex:.4f},{b}{ey:.4f}) r1={radius:.4f} "
-                f"r2={radius2:.4f}")
+                f"r2={radius2:.4f}"
+            )
         abs_err = abs(radius - radius2)
         rel_err = abs_err / max(radius, radius2)
         if abs_err > spiral_abs * 100.0 or (rel_err > spiral_rel and abs_err > spiral_abs):
@@ -643,9 +734,13 @@ class MotionMixin:
                 f"Radius to end of arc differs from radius to start: "
                 f"start=({a}{cx:.4f},{b}{cy:.4f}) center=({a}{center_x:.4f},{b}{center_y:.4f}) "
                 f"end=({a}{ex:.4f},{b}{ey:.4f}) r1={radius:.4f} r2={radius2:.4f} "
-                f"abs_err={c_format('%.4g', abs_err)} rel_err={rel_err * 100:.4f}%")
-        if comp_side and radius <= tool_radius and (
-                (comp_side == LEFT and move == G_3) or (comp_side == RIGHT and move == G_2)):
+                f"abs_err={c_format('%.4g', abs_err)} rel_err={rel_err * 100:.4f}%"
+            )
+        if (
+            comp_side
+            and radius <= tool_radius
+            and ((comp_side == LEFT and move == G_3) or (comp_side == RIGHT and move == G_2))
+        ):
             raise InterpError("Tool radius not less than arc radius with comp")
         turn = -p_number if move == G_2 else p_number
         return center_x, center_y, turn
@@ -687,14 +782,19 @@ class MotionMixin:
             py -= off[1]
             pz = block.z_number - org[2] - off[2] - tlo[2] if block.z_flag else cur[2]
             result = [px, py, pz]
-            for k, letter, wrapped in ((3, "a", self.a_axis_wrapped),
-                                       (4, "b", self.b_axis_wrapped),
-                                       (5, "c", self.c_axis_wrapped)):
+            for k, letter, wrapped in (
+                (3, "a", self.a_axis_wrapped),
+                (4, "b", self.b_axis_wrapped),
+                (5, "c", self.c_axis_wrapped),
+            ):
                 if getattr(block, letter + "_flag"):
                     value = getattr(block, letter + "_number")
                     if wrapped:
-                        result.append(self.unwrap_rotary(
-                            value, value - org[k] - off[k] - tlo[k], cur[k], letter.upper()))
+                        result.append(
+                            self.unwrap_rotary(
+                                value, value - org[k] - off[k] - tlo[k], cur[k], letter.upper()
+                            )
+                        )
                     else:
                         result.append(value - org[k] - off[k])
                 else:
@@ -711,8 +811,11 @@ class MotionMixin:
         plane = self.plane
         if self.distance_mode == MODE_ABSOLUTE:
             px = block.x_number if block.x_flag else (self.program_x if cm else cur[0])
-            py = block.y_number if block.y_flag else (
-                self.program_y if cm and plane == C.PLANE_XY else cur[1])
+            py = (
+                block.y_number
+                if block.y_flag
+                else (self.program_y if cm and plane == C.PLANE_XY else cur[1])
+            )
             if block.radius_flag or block.theta_flag:
                 if block.x_flag or block.y_flag:
                     raise InterpError("Cannot specify X or Y words with polar coordinate")
@@ -728,12 +831,17 @@ class MotionMixin:
                     radius = ldmath.hypot(py, px)
                     t = block.theta * (math.pi / 180.0)
                     px, py = radius * math.cos(t), radius * math.sin(t)
-            pz = block.z_number if block.z_flag else (
-                self.program_z if cm and plane == C.PLANE_XZ else cur[2])
+            pz = (
+                block.z_number
+                if block.z_flag
+                else (self.program_z if cm and plane == C.PLANE_XZ else cur[2])
+            )
             result = [px, py, pz]
-            for k, letter, wrapped in ((3, "a", self.a_axis_wrapped),
-                                       (4, "b", self.b_axis_wrapped),
-                                       (5, "c", self.c_axis_wrapped)):
+            for k, letter, wrapped in (
+                (3, "a", self.a_axis_wrapped),
+                (4, "b", self.b_axis_wrapped),
+                (5, "c", self.c_axis_wrapped),
+            ):
                 if getattr(block, letter + "_flag"):
                     value = getattr(block, letter + "_number")
                     if wrapped:
@@ -757,8 +865,8 @@ class MotionMixin:
                 raise InterpError("Cannot specify X or Y words with polar coordinate")
             if py == 0 and px == 0:
                 raise InterpError(
-                    "Incremental motion with polar coordinates is indeterminate when at the "
-                    "origin")
+                    "Incremental motion with polar coordinates is indeterminate when at the origin"
+                )
             t = math.atan2(py, px)
             radius = ldmath.hypot(py, px) + block.radius
             px, py = radius * math.cos(t), radius * math.sin(t)
@@ -767,23 +875,27 @@ class MotionMixin:
                 raise InterpError("Cannot specify X or Y words with polar coordinate")
             if py == 0 and px == 0:
                 raise InterpError(
-                    "G91 motion with polar coordinates is indeterminate when at the origin")
+                    "G91 motion with polar coordinates is indeterminate when at the origin"
+                )
             t = math.atan2(py, px) + block.theta * (math.pi / 180.0)
             radius = ldmath.hypot(py, px)
             px, py = radius * math.cos(t), radius * math.sin(t)
         pz = self.program_z if cm and plane == C.PLANE_XZ else cur[2]
         if block.z_flag:
             pz += block.z_number
-        return [px, py, pz,
-                cur[3] + block.a_number if block.a_flag else cur[3],
-                cur[4] + block.b_number if block.b_flag else cur[4],
-                cur[5] + block.c_number if block.c_flag else cur[5],
-                cur[6] + block.u_number if block.u_flag else cur[6],
-                cur[7] + block.v_number if block.v_flag else cur[7],
-                cur[8] + block.w_number if block.w_flag else cur[8]]
+        return [
+            px,
+            py,
+            pz,
+            cur[3] + block.a_number if block.a_flag else cur[3],
+            cur[4] + block.b_number if block.b_flag else cur[4],
+            cur[5] + block.c_number if block.c_flag else cur[5],
+            cur[6] + block.u_number if block.u_flag else cur[6],
+            cur[7] + block.v_number if block.v_flag else cur[7],
+            cur[8] + block.w_number if block.w_flag else cur[8],
+        ]
 
-    def unwrap_rotary(self, sign_of: float, commanded: float, current: float,
-                      axis: str) -> float:
+    def unwrap_rotary(self, sign_of: float, commanded: float, current: float, axis: str) -> float:
         if sign_of <= -360.0 or sign_of >= 360.0:
             raise InterpError(wrapped_msg(sign_of, axis))
         neg = math.copysign(1.0, sign_of) < 0.0
@@ -801,12 +913,17 @@ class MotionMixin:
         y = absolute[1] - org[1] - tlo[1]
         x, y = rotate(x, y, -self.rotation_xy)
         result = [x - off[0], y - off[1], absolute[2] - org[2] - off[2] - tlo[2]]
-        for k, wrapped, letter in ((3, self.a_axis_wrapped, "A"), (4, self.b_axis_wrapped, "B"),
-                                   (5, self.c_axis_wrapped, "C")):
+        for k, wrapped, letter in (
+            (3, self.a_axis_wrapped, "A"),
+            (4, self.b_axis_wrapped, "B"),
+            (5, self.c_axis_wrapped, "C"),
+        ):
             if wrapped:
-                result.append(self.unwrap_rotary(absolute[k],
-                                                 absolute[k] - org[k] - off[k] - tlo[k],
-                                                 self.current[k], letter))
+                result.append(
+                    self.unwrap_rotary(
+                        absolute[k], absolute[k] - org[k] - off[k] - tlo[k], self.current[k], letter
+                    )
+                )
             else:
                 result.append(absolute[k] - org[k] - off[k])
         for k in (6, 7, 8):
@@ -825,7 +942,7 @@ class MotionMixin:
             for k in range(9):
                 v[k] += tlo[k]
         base = 5200 + system * 20
-        stored = self._u2p_pose(p[base + 1:base + 10])
+        stored = self._u2p_pose(p[base + 1 : base + 10])
         for k in range(9):
             v[k] -= stored[k]
         v[0], v[1] = rotate(v[0], v[1], -p[base + 10])
@@ -872,16 +989,23 @@ class _G7xMachine:
 
 def _straight_length(end: list[float], start: list[float]) -> float:
     tiny = 1e-7
-    if (abs(start[0] - end[0]) > tiny or abs(start[1] - end[1]) > tiny
-            or abs(start[2] - end[2]) > tiny):
-        return math.sqrt((end[0] - start[0]) ** 2 + (end[1] - start[1]) ** 2
-                         + (end[2] - start[2]) ** 2)
-    if (abs(start[6] - end[6]) > tiny or abs(start[7] - end[7]) > tiny
-            or abs(start[8] - end[8]) > tiny):
-        return math.sqrt((end[6] - start[6]) ** 2 + (end[7] - start[7]) ** 2
-                         + (end[8] - start[8]) ** 2)
-    return math.sqrt((end[3] - start[3]) ** 2 + (end[4] - start[4]) ** 2
-                     + (end[5] - start[5]) ** 2)
+    if (
+        abs(start[0] - end[0]) > tiny
+        or abs(start[1] - end[1]) > tiny
+        or abs(start[2] - end[2]) > tiny
+    ):
+        return math.sqrt(
+            (end[0] - start[0]) ** 2 + (end[1] - start[1]) ** 2 + (end[2] - start[2]) ** 2
+        )
+    if (
+        abs(start[6] - end[6]) > tiny
+        or abs(start[7] - end[7]) > tiny
+        or abs(start[8] - end[8]) > tiny
+    ):
+        return math.sqrt(
+            (end[6] - start[6]) ** 2 + (end[7] - start[7]) ** 2 + (end[8] - start[8]) ** 2
+        )
+    return math.sqrt((end[3] - start[3]) ** 2 + (end[4] - start[4]) ** 2 + (end[5] - start[5]) ** 2)
 
 
 def _find_turn(x1, y1, center_x, center_y, turn, x2, y2) -> float:

@@ -32,8 +32,7 @@ class OffsetsMixin:
 
     def convert_coordinate_system(self, g_code: int) -> None:
         if self.cutter_comp_side:
-            raise InterpError(
-                "Cannot change coordinate systems with cutter radius compensation on")
+            raise InterpError("Cannot change coordinate systems with cutter radius compensation on")
         origin = {540: 1, 550: 2, 560: 3, 570: 4, 580: 5, 590: 6, 591: 7, 592: 8, 593: 9}[g_code]
         if origin == self.origin_index:
             self._enq("COMMENT", "interpreter: continuing to use same coordinate system")
@@ -43,7 +42,7 @@ class OffsetsMixin:
         pars = self.parameters
         pars[5220] = float(origin)
         base = 5200 + origin * 20
-        self.origin_offset = self._u2p_pose(pars[base + 1:base + 10])
+        self.origin_offset = self._u2p_pose(pars[base + 1 : base + 10])
         self.rotation_xy = pars[base + 10]
         self.canon.SET_G5X_OFFSET(origin, *self.origin_offset)
         self.canon.SET_G92_OFFSET(*self.axis_offset)
@@ -75,11 +74,13 @@ class OffsetsMixin:
     def convert_axis_offsets(self, g_code: int, block: Block) -> None:
         if self.cutter_comp_side:
             raise InterpError("Cannot change axis offsets with cutter radius comp")
-        for letter, wrapped in (("a", self.a_axis_wrapped), ("b", self.b_axis_wrapped),
-                                ("c", self.c_axis_wrapped)):
+        for letter, wrapped in (
+            ("a", self.a_axis_wrapped),
+            ("b", self.b_axis_wrapped),
+            ("c", self.c_axis_wrapped),
+        ):
             value = getattr(block, letter + "_number")
-            if getattr(block, letter + "_flag") and wrapped and (value <= -360.0
-                                                                  or value >= 360.0):
+            if getattr(block, letter + "_flag") and wrapped and (value <= -360.0 or value >= 360.0):
                 raise InterpError(wrapped_msg(value, letter.upper()))
         pars = self.parameters
         cur = self.current
@@ -121,20 +122,26 @@ class OffsetsMixin:
             raise InterpError("Cannot set reference point with cutter compensation in effect")
         cur, off, org, tlo = self.current, self.axis_offset, self.origin_offset, self.tool_offset
         x, y = rotate(cur[0] + off[0], cur[1] + off[1], self.rotation_xy)
-        values = [self.p2u_len(x + tlo[0] + org[0]), self.p2u_len(y + tlo[1] + org[1]),
-                  self.p2u_len(cur[2] + tlo[2] + org[2] + off[2])]
+        values = [
+            self.p2u_len(x + tlo[0] + org[0]),
+            self.p2u_len(y + tlo[1] + org[1]),
+            self.p2u_len(cur[2] + tlo[2] + org[2] + off[2]),
+        ]
         for k in (3, 4, 5):
             values.append(cur[k] + tlo[k] + org[k] + off[k])
         for k in (6, 7, 8):
             values.append(self.p2u_len(cur[k] + tlo[k] + org[k] + off[k]))
-        for k, wrapped in ((3, self.a_axis_wrapped), (4, self.b_axis_wrapped),
-                           (5, self.c_axis_wrapped)):
+        for k, wrapped in (
+            (3, self.a_axis_wrapped),
+            (4, self.b_axis_wrapped),
+            (5, self.c_axis_wrapped),
+        ):
             if wrapped:
                 values[k] = math.fmod(values[k], 360.0)
                 if values[k] < 0:
                     values[k] += 360.0
         base = 5161 if code == G_28_1 else 5181
-        self.parameters[base:base + 9] = values
+        self.parameters[base : base + 9] = values
 
     def convert_home(self, move: int, block: Block) -> None:
         ends = self.find_ends(block)
@@ -144,7 +151,7 @@ class OffsetsMixin:
         self.canon.STRAIGHT_TRAVERSE(block.line_number, *ends)
         self.current = list(ends)
         base = 5161 if move == G_28 else 5181
-        home = self.find_relative(self._u2p_pose(self.parameters[base:base + 9]))
+        home = self.find_relative(self._u2p_pose(self.parameters[base : base + 9]))
         words = axis_words(block)
         if all(w is None for w in words):
             ends = home
@@ -155,8 +162,11 @@ class OffsetsMixin:
         self.current = list(ends)
 
     def _index_rotaries(self, ends: list[float], line: int) -> None:
-        for k, jnum in ((3, self.a_indexer_jnum), (4, self.b_indexer_jnum),
-                        (5, self.c_indexer_jnum)):
+        for k, jnum in (
+            (3, self.a_indexer_jnum),
+            (4, self.b_indexer_jnum),
+            (5, self.c_indexer_jnum),
+        ):
             if ends[k] != self.current[k] and jnum != -1:
                 self.issue_straight_index(k, jnum, ends[k], line)
 
@@ -184,15 +194,23 @@ class OffsetsMixin:
         if p_int == 0:
             p_int = self.origin_index
         l20 = block.l_number == 20
-        for letter, wrapped in (("a", self.a_axis_wrapped), ("b", self.b_axis_wrapped),
-                                ("c", self.c_axis_wrapped)):
+        for letter, wrapped in (
+            ("a", self.a_axis_wrapped),
+            ("b", self.b_axis_wrapped),
+            ("c", self.c_axis_wrapped),
+        ):
             value = getattr(block, letter + "_number")
-            if l20 and getattr(block, letter + "_flag") and wrapped and (
-                    value <= -360.0 or value >= 360.0):
+            if (
+                l20
+                and getattr(block, letter + "_flag")
+                and wrapped
+                and (value <= -360.0 or value >= 360.0)
+            ):
                 raise InterpError(wrapped_msg(value, letter.upper()))
         if self.cutter_comp_side and p_int == self.origin_index:
             raise InterpError(
-                "Cannot change the active coordinate system with cutter radius compensation on")
+                "Cannot change the active coordinate system with cutter radius compensation on"
+            )
         cs = self.find_current_in_system(p_int)
         base = 5200 + p_int * 20
         if block.r_flag:
@@ -212,8 +230,9 @@ class OffsetsMixin:
             pars[base + 1] = self.p2u_len(x)
             pars[base + 2] = self.p2u_len(y)
             if p_int == self.origin_index:
-                self.current[0], self.current[1] = rotate(self.current[0], self.current[1],
-                                                          self.rotation_xy)
+                self.current[0], self.current[1] = rotate(
+                    self.current[0], self.current[1], self.rotation_xy
+                )
                 self.rotation_xy = 0.0
         else:
             if block.x_flag:
@@ -252,6 +271,3 @@ class OffsetsMixin:
             self.canon.SET_XY_ROTATION(self.rotation_xy)
         else:
             self._enq("COMMENT", "interpreter: setting coordinate system origin")
-
-
-

@@ -106,12 +106,15 @@ class OWordMixin:
             if self.sequence_number - 1 == op.sequence_number:
                 raise InterpError(
                     f"File:{self.filename} line:{self.sequence_number} sub: o|{block.o_name}| "
-                    "found in illegal location")
+                    "found in illegal location"
+                )
             raise InterpError(
                 f"File:{self.filename} line:{self.sequence_number} redefining sub: "
-                f"o|{block.o_name}| already defined in file:{op.filename}")
-        self.offset_map[block.o_name] = _Offset(block.o_type, block.offset, self.filename,
-                                                self.sequence_number - 1)
+                f"o|{block.o_name}| already defined in file:{op.filename}"
+            )
+        self.offset_map[block.o_name] = _Offset(
+            block.o_type, block.offset, self.filename, self.sequence_number - 1
+        )
 
     def control_find_oword(self, block: Block) -> _Offset:
         op = self.offset_map.get(block.o_name)
@@ -189,7 +192,8 @@ class OWordMixin:
                     if lines is None:
                         raise InterpError(
                             f"cannot reopen file {previous.filename} - removed or renamed? "
-                            "(No such file or directory)")
+                            "(No such file or directory)"
+                        )
                     self.file_lines = lines
                     self.filename = previous.filename
                 self.file_pos = previous.position
@@ -274,16 +278,19 @@ class OWordMixin:
         elif otype in (O_endsub, O_return, M_99):
             if otype == M_99 and self.call_level == 0:
                 raise InterpError(
-                    "Bug:  Reached convert_control_functions() from M99 in main program")
+                    "Bug:  Reached convert_control_functions() from M99 in main program"
+                )
             if self.call_level == 0 and self.sub_name is None:
-                self._oerr(f"{self.sequence_number}: not in a subroutine definition: "
-                           f"'{self.linetext}'")
+                self._oerr(
+                    f"{self.sequence_number}: not in a subroutine definition: '{self.linetext}'"
+                )
             frame = self.sub_context[self.call_level]
             if frame.call_type == CT_NGC_M98_SUB and otype != M_99:
                 raise InterpError("Fanuc 'O....' subroutine definition must end with 'M99'")
             if frame.call_type == CT_NGC_OWORD_SUB and otype not in (O_endsub, O_return):
-                raise InterpError("'O.... endsub' or 'O.... return' must follow 'O.... sub' "
-                                  "subroutine definition")
+                raise InterpError(
+                    "'O.... endsub' or 'O.... return' must follow 'O.... sub' subroutine definition"
+                )
             self.execute_return(frame, frame.call_type)
         elif otype in (O_call, M_98):
             self.enter_context(block)
@@ -296,10 +303,13 @@ class OWordMixin:
         elif otype in (O_repeat, O_while):
             op = self.offset_map.get(block.o_name)
             if op is not None:
-                if (otype == O_repeat or op.type != O_do) and \
-                        self.sequence_number != op.sequence_number + 1:
-                    self._oerr(f"{self.sequence_number}: duplicate O-word label: "
-                               f"'{self.linetext}' - defined in line {op.sequence_number + 1}")
+                if (
+                    otype == O_repeat or op.type != O_do
+                ) and self.sequence_number != op.sequence_number + 1:
+                    self._oerr(
+                        f"{self.sequence_number}: duplicate O-word label: "
+                        f"'{self.linetext}' - defined in line {op.sequence_number + 1}"
+                    )
             else:
                 self.control_save_offset(block)
             self.skipping_o = None
@@ -329,8 +339,10 @@ class OWordMixin:
             op = self.offset_map.get(block.o_name)
             if op is not None:
                 if self.sequence_number != op.sequence_number + 1:
-                    self._oerr(f"{self.sequence_number}: duplicate O-word label - already "
-                               f"defined in line {op.sequence_number + 1}: '{self.linetext}'")
+                    self._oerr(
+                        f"{self.sequence_number}: duplicate O-word label - already "
+                        f"defined in line {op.sequence_number + 1}: '{self.linetext}'"
+                    )
             else:
                 self.control_save_offset(block)
             if self.test_value != 0.0:
@@ -343,8 +355,10 @@ class OWordMixin:
         elif otype in (O_elseif, O_else):
             op = self._find_label(block)
             if op is not None and op.type != O_if:
-                self._oerr(f"{self.sequence_number}: no matching 'if' label: '{self.linetext}'"
-                           f" (found '{O_OPS[op.type][2:]}' in line {op.sequence_number + 1})")
+                self._oerr(
+                    f"{self.sequence_number}: no matching 'if' label: '{self.linetext}'"
+                    f" (found '{O_OPS[op.type][2:]}' in line {op.sequence_number + 1})"
+                )
             if otype == O_elseif:
                 if self.skipping_o and self.skipping_o != block.o_name:
                     return INTERP_OK
@@ -366,17 +380,21 @@ class OWordMixin:
         elif otype == O_endif:
             op = self._find_label(block)
             if op is not None and op.type != O_if:
-                self._oerr(f"{self.sequence_number}: no matching label: '{block.o_name}' (found "
-                           f"'{O_OPS[op.type][2:]}' in line {op.sequence_number + 1}): "
-                           f"'{self.linetext}'")
+                self._oerr(
+                    f"{self.sequence_number}: no matching label: '{block.o_name}' (found "
+                    f"'{O_OPS[op.type][2:]}' in line {op.sequence_number + 1}): "
+                    f"'{self.linetext}'"
+                )
             self.skipping_o = None
             self.executed_if = 1
         elif otype in (O_break, O_continue):
             op = self._find_label(block)
             if op is not None and op.type not in (O_while, O_do):
-                self._oerr(f"{self.sequence_number}: no matching while/do label: "
-                           f"'{self.linetext}' (found '{O_OPS[op.type][2:]}' in line "
-                           f"{op.sequence_number + 1})")
+                self._oerr(
+                    f"{self.sequence_number}: no matching while/do label: "
+                    f"'{self.linetext}' (found '{O_OPS[op.type][2:]}' in line "
+                    f"{op.sequence_number + 1})"
+                )
             if otype == O_break:
                 self.skipping_o = block.o_name
                 self.skipping_start = self.sequence_number
@@ -389,10 +407,14 @@ class OWordMixin:
                 self.doing_continue = 1
         elif otype in (O_endrepeat, O_endwhile):
             op = self._find_label(block)
-            if op is not None and ((otype == O_endrepeat and op.type != O_repeat)
-                                   or (otype == O_endwhile and op.type != O_while)):
-                self._oerr(f"{self.sequence_number}: no matching label: '{self.linetext}' "
-                           f"(found '{O_OPS[op.type][2:]}' in line {op.sequence_number + 1})")
+            if op is not None and (
+                (otype == O_endrepeat and op.type != O_repeat)
+                or (otype == O_endwhile and op.type != O_while)
+            ):
+                self._oerr(
+                    f"{self.sequence_number}: no matching label: '{self.linetext}' "
+                    f"(found '{O_OPS[op.type][2:]}' in line {op.sequence_number + 1})"
+                )
             if self.skipping_o and self.skipping_o == block.o_name:
                 self.skipping_o = None
                 if self.doing_continue:

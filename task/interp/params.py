@@ -21,7 +21,9 @@ from .errors import InterpError
 MAX_PARAMETERS = 5602
 
 REQUIRED = (
-    list(range(5161, 5170)) + list(range(5181, 5190)) + list(range(5210, 5221))
+    list(range(5161, 5170))
+    + list(range(5181, 5190))
+    + list(range(5210, 5221))
     + [n for base in range(5221, 5390, 20) for n in range(base, base + 10)]
 )
 _REQUIRED_SET = frozenset(REQUIRED)
@@ -33,15 +35,60 @@ PA_USE_LOOKUP = 8
 PA_FROM_INI = 16
 
 _PREDEFINED = [
-    "_line", "_motion_mode", "_plane", "_ccomp", "_metric", "_imperial", "_absolute",
-    "_incremental", "_inverse_time", "_units_per_minute", "_units_per_rev", "_coord_system",
-    "_tool_offset", "_retract_r_plane", "_retract_old_z", "_spindle_rpm_mode",
-    "_spindle_css_mode", "_ijk_absolute_mode", "_lathe_diameter_mode", "_lathe_radius_mode",
-    "_spindle_on", "_spindle_cw", "_mist", "_flood", "_speed_override", "_feed_override",
-    "_adaptive_feed", "_feed_hold", "_feed", "_rpm", "_current_tool", "_current_pocket",
-    "_selected_pocket", "_selected_tool", "_x", "_y", "_z", "_a", "_b", "_c", "_u", "_v",
-    "_w", "_abs_x", "_abs_y", "_abs_z", "_abs_a", "_abs_b", "_abs_c", "_value",
-    "_value_returned", "_task", "_call_level", "_remap_level",
+    "_line",
+    "_motion_mode",
+    "_plane",
+    "_ccomp",
+    "_metric",
+    "_imperial",
+    "_absolute",
+    "_incremental",
+    "_inverse_time",
+    "_units_per_minute",
+    "_units_per_rev",
+    "_coord_system",
+    "_tool_offset",
+    "_retract_r_plane",
+    "_retract_old_z",
+    "_spindle_rpm_mode",
+    "_spindle_css_mode",
+    "_ijk_absolute_mode",
+    "_lathe_diameter_mode",
+    "_lathe_radius_mode",
+    "_spindle_on",
+    "_spindle_cw",
+    "_mist",
+    "_flood",
+    "_speed_override",
+    "_feed_override",
+    "_adaptive_feed",
+    "_feed_hold",
+    "_feed",
+    "_rpm",
+    "_current_tool",
+    "_current_pocket",
+    "_selected_pocket",
+    "_selected_tool",
+    "_x",
+    "_y",
+    "_z",
+    "_a",
+    "_b",
+    "_c",
+    "_u",
+    "_v",
+    "_w",
+    "_abs_x",
+    "_abs_y",
+    "_abs_z",
+    "_abs_a",
+    "_abs_b",
+    "_abs_c",
+    "_value",
+    "_value_returned",
+    "_task",
+    "_call_level",
+    "_remap_level",
 ]
 
 
@@ -171,7 +218,9 @@ class ParamsMixin:
                 value = self._fetch_ini_param(name)
                 if value is not None:
                     self.sub_context[0].named_params[name] = [
-                        value, PA_GLOBAL | PA_READONLY | PA_FROM_INI]
+                        value,
+                        PA_GLOBAL | PA_READONLY | PA_FROM_INI,
+                    ]
                     return True, value
             # #<_hal[...]>: the standalone interpreter has no HAL, so the lookup fails
             # quietly and the parameter counts as undefined, as in rs274
@@ -186,7 +235,7 @@ class ParamsMixin:
             return None
         cap = name.upper()
         section = cap[5:close]
-        key = cap[close + 1:]
+        key = cap[close + 1 :]
         value = self.ini.find(section, key)
         # a missing or non-numeric entry makes the parameter undefined: LinuxCNC's lookup
         # reports an error that its caller drops

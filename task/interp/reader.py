@@ -47,14 +47,48 @@ TOLERANCE_EQUAL = 0.0001
 READONLY_PARAMETERS = frozenset(list(range(5400, 5414)) + list(range(5420, 5429)))
 
 # binary operations, LinuxCNC's numbering
-(NO_OPERATION, DIVIDED_BY, MODULO, POWER, TIMES, AND2, EXCLUSIVE_OR, MINUS, NON_EXCLUSIVE_OR,
- PLUS, RIGHT_BRACKET, LT, EQ, NE, LE, GE, GT) = range(17)
-_PRECEDENCE = {RIGHT_BRACKET: 1, AND2: 2, EXCLUSIVE_OR: 2, NON_EXCLUSIVE_OR: 2, LT: 3, EQ: 3,
-               NE: 3, LE: 3, GE: 3, GT: 3, MINUS: 4, PLUS: 4, NO_OPERATION: 5,
-               DIVIDED_BY: 5, MODULO: 5, TIMES: 5, POWER: 6}
+(
+    NO_OPERATION,
+    DIVIDED_BY,
+    MODULO,
+    POWER,
+    TIMES,
+    AND2,
+    EXCLUSIVE_OR,
+    MINUS,
+    NON_EXCLUSIVE_OR,
+    PLUS,
+    RIGHT_BRACKET,
+    LT,
+    EQ,
+    NE,
+    LE,
+    GE,
+    GT,
+) = range(17)
+_PRECEDENCE = {
+    RIGHT_BRACKET: 1,
+    AND2: 2,
+    EXCLUSIVE_OR: 2,
+    NON_EXCLUSIVE_OR: 2,
+    LT: 3,
+    EQ: 3,
+    NE: 3,
+    LE: 3,
+    GE: 3,
+    GT: 3,
+    MINUS: 4,
+    PLUS: 4,
+    NO_OPERATION: 5,
+    DIVIDED_BY: 5,
+    MODULO: 5,
+    TIMES: 5,
+    POWER: 6,
+}
 
-_DOWNCASE = str.maketrans({chr(c): chr(c + 32) for c in range(65, 91)} | {" ": None, "\t": None,
-                                                                         "\r": None})
+_DOWNCASE = str.maketrans(
+    {chr(c): chr(c + 32) for c in range(65, 91)} | {" ": None, "\t": None, "\r": None}
+)
 _NUMBER_SPAN = re.compile(r"[+-]*[0-9.]*")
 _VALID_NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)")
 _PLAIN_NUMBER = re.compile(r"-?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?![0-9.])")
@@ -126,8 +160,10 @@ class ReaderMixin:
                 m_number, _ = self.read_integer_value(line, counter + 1)
             except InterpError:
                 m_number = -1
-        if (counter < length and line[counter] == "o") or m_number == 98 or (
-            m_number == 99 and self.call_level > 0
+        if (
+            (counter < length and line[counter] == "o")
+            or m_number == 98
+            or (m_number == 99 and self.call_level > 0)
         ):
             counter = self.read_o(line, counter, block)
             if self.skipping_o:
@@ -206,10 +242,12 @@ class ReaderMixin:
             "s": self.read_s,
             "t": self.read_t,
         }
-        for letter, message in (("i", "Multiple i words on one line"),
-                                ("j", "Multiple j words on one line"),
-                                ("k", "Multiple k words on one line"),
-                                ("r", "Multiple r words on one line")):
+        for letter, message in (
+            ("i", "Multiple i words on one line"),
+            ("j", "Multiple j words on one line"),
+            ("k", "Multiple k words on one line"),
+            ("r", "Multiple r words on one line"),
+        ):
             readers[letter] = self._word_reader(letter, message)
         for bit, letter in enumerate("xyzabcuvw"):
             if axis_mask & (1 << bit):
@@ -242,7 +280,7 @@ class ReaderMixin:
         end = line.find(")", counter + 1)
         if end < 0:  # cannot happen after close_and_downcase
             end = len(line)
-        block.comment = line[counter + 1:end]
+        block.comment = line[counter + 1 : end]
         return end + 1
 
     def read_semicolon(self, line: str, counter: int, block: Block) -> int:
@@ -664,7 +702,7 @@ class ReaderMixin:
     def read_operation(line: str, counter: int) -> tuple[int, int]:
         c = line[counter] if counter < len(line) else ""
         counter += 1
-        nxt = line[counter:counter + 2]
+        nxt = line[counter : counter + 2]
         if c == "+":
             return PLUS, counter
         if c == "-":
@@ -745,10 +783,21 @@ _SEEN = object()  # compiled-value cache: read once so far
 _NEVER = object()  # compiled-value cache: cannot be compiled
 
 _O_KEYWORDS = [
-    ("sub", O_sub), ("endsub", O_endsub), ("call", O_call), ("do", O_do),
-    ("while", O_while), ("repeat", O_repeat), ("if", O_if), ("elseif", O_elseif),
-    ("else", O_else), ("endif", O_endif), ("break", O_break), ("continue", O_continue),
-    ("endwhile", O_endwhile), ("endrepeat", O_endrepeat), ("return", O_return),
+    ("sub", O_sub),
+    ("endsub", O_endsub),
+    ("call", O_call),
+    ("do", O_do),
+    ("while", O_while),
+    ("repeat", O_repeat),
+    ("if", O_if),
+    ("elseif", O_elseif),
+    ("else", O_else),
+    ("endif", O_endif),
+    ("break", O_break),
+    ("continue", O_continue),
+    ("endwhile", O_endwhile),
+    ("endrepeat", O_endrepeat),
+    ("return", O_return),
 ]
 # LinuxCNC tries the keywords in this order, as prefixes; so does the alternation
 _O_KEYWORD = re.compile("|".join(word for word, _ in _O_KEYWORDS))
@@ -766,7 +815,7 @@ def _to_c_int(value: float) -> int:
 def _read_operation_unary(line: str, counter: int) -> tuple[str, int]:
     c = line[counter] if counter < len(line) else ""
     counter += 1
-    rest = line[counter:counter + 5]
+    rest = line[counter : counter + 5]
     if c == "a":
         for name in ("bs", "cos", "sin", "tan"):
             if rest.startswith(name):
@@ -829,10 +878,10 @@ def _execute_unary(value: float, operation: str) -> float:
             return math.exp(value)
         except OverflowError:
             return math.inf
-    if operation == "fix":
-        return float(math.floor(value))
+    if operation == "fix":  # C's floor()/ceil() keep the sign of a zero result
+        return math.copysign(float(math.floor(value)), value)
     if operation == "fup":
-        return float(math.ceil(value))
+        return math.copysign(float(math.ceil(value)), value)
     if operation == "ln":
         if value <= 0.0:
             raise InterpError("Zero or negative argument to ln")

@@ -119,8 +119,13 @@ class ToolsMixin:
         _, toolno = is_near_int(block.p_number)
         idx = self.find_tool_index(toolno)
         words = axis_words(block)
-        if not (any(w is not None for w in words) or block.r_flag or block.q_flag
-                or block.i_flag or block.j_flag):
+        if not (
+            any(w is not None for w in words)
+            or block.r_flag
+            or block.q_flag
+            or block.i_flag
+            or block.j_flag
+        ):
             raise InterpError("G10 L1 without offsets has no effect")
         entry = self.tool_table[idx]
         toff = list(entry.offset)
@@ -172,8 +177,15 @@ class ToolsMixin:
             entry.orientation = q
         self.tool_table.set(idx, entry)
         canon = self.canon
-        canon.SET_TOOL_TABLE_ENTRY(idx, entry.toolno, entry.offset, entry.diameter,
-                                   entry.frontangle, entry.backangle, entry.orientation)
+        canon.SET_TOOL_TABLE_ENTRY(
+            idx,
+            entry.toolno,
+            entry.offset,
+            entry.diameter,
+            entry.frontangle,
+            entry.backangle,
+            entry.orientation,
+        )
         if not self.random_toolchanger and self.current_pocket == idx:
             self.tool_table.set(0, entry)
         spindle = self.tool_table[0]
@@ -184,8 +196,15 @@ class ToolsMixin:
             pars[5400] = spindle.toolno if spindle.toolno > 0 else 0
         self._set_tool_params_from(spindle)
         if not self.random_toolchanger and idx == self.current_pocket:
-            canon.SET_TOOL_TABLE_ENTRY(0, entry.toolno, entry.offset, entry.diameter,
-                                       entry.frontangle, entry.backangle, entry.orientation)
+            canon.SET_TOOL_TABLE_ENTRY(
+                0,
+                entry.toolno,
+                entry.offset,
+                entry.diameter,
+                entry.frontangle,
+                entry.backangle,
+                entry.orientation,
+            )
 
     def _set_tool_params_from(self, entry) -> None:
         pars = self.parameters
@@ -231,4 +250,3 @@ class _ToolTableView:
 
     def set(self, idx: int, entry) -> None:
         self._entries[idx] = entry.copy()
-
