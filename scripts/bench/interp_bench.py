@@ -43,8 +43,14 @@ def short_moves_program(path: Path) -> None:
     if REFERENCE.exists():
         shutil.copy(REFERENCE, path)
         return
-    lines = ["%", "(50,000 short moves)", "G21 G17 G40 G49 G80 G90 G94 G54", "G64", "G0 Z10",
-             "G0 X0 Y0"]
+    lines = [
+        "%",
+        "(50,000 short moves)",
+        "G21 G17 G40 G49 G80 G90 G94 G54",
+        "G64",
+        "G0 Z10",
+        "G0 X0 Y0",
+    ]
     n = 50000 - len(lines) - 4
     for k in range(n):
         t = 2 * math.pi * k / n
@@ -94,8 +100,14 @@ def median_time(command: list[str], cwd: Path, runs: int) -> float:
     times = []
     for _ in range(runs):
         start = time.perf_counter()
-        subprocess.run(command, cwd=cwd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                       stdin=subprocess.DEVNULL, check=False)
+        subprocess.run(
+            command,
+            cwd=cwd,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+            stdin=subprocess.DEVNULL,
+            check=False,
+        )
         times.append(time.perf_counter() - start)
     return statistics.median(times)
 

@@ -62,16 +62,10 @@ class MCodesMixin:
         if m5 != -1:
             if m5 in (62, 63, 64, 65):
                 if self.cutter_comp_side:
-                    raise InterpError(
-                        {
-                            62: "Cannot set motion output with cutter radius compensation on",
-                            63: "Cannot set motion digital output with cutter radius compensation on",
-                            64: "Cannot set auxiliary digital output with cutter radius compensation"
-                            " on",
-                            65: "Cannot set auxiliary digital output with cutter radius compensation"
-                            " on",
-                        }[m5]
+                    what = {62: "motion output", 63: "motion digital output"}.get(
+                        m5, "auxiliary digital output"
                     )
+                    raise InterpError(f"Cannot set {what} with cutter radius compensation on")
                 if not block.p_flag:
                     raise InterpError(f"No valid P word with M{m5}")
                 index = round_to_int(block.p_number)

@@ -48,8 +48,7 @@ def run_rs274_inprocess(args: list[str], cwd: Path) -> tuple[str, str, int]:
         os.chdir(old_cwd)
     out.flush()
     err.flush()
-    return (out.buffer.getvalue().decode("latin-1"), err.buffer.getvalue().decode("latin-1"),
-            rc)
+    return (out.buffer.getvalue().decode("latin-1"), err.buffer.getvalue().decode("latin-1"), rc)
 
 
 def corpus_args(program: Path) -> list[str]:
@@ -105,8 +104,9 @@ def compare(program: Path, folder: Path) -> list[str]:
 def _diff(want: str, got: str) -> str:
     import difflib
 
-    lines = difflib.unified_diff(want.splitlines(), got.splitlines(), "rs274", "ours",
-                                 lineterm="", n=1)
+    lines = difflib.unified_diff(
+        want.splitlines(), got.splitlines(), "rs274", "ours", lineterm="", n=1
+    )
     return "\n".join(list(lines)[:40])
 
 

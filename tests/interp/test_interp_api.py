@@ -47,16 +47,25 @@ def calls(out: io.StringIO) -> list[str]:
 
 
 def test_printing_canon_implements_every_canon_call() -> None:
-    wanted = {name for name, _ in inspect.getmembers(Canon, inspect.isfunction)
-              if not name.startswith("_")}
+    wanted = {
+        name
+        for name, _ in inspect.getmembers(Canon, inspect.isfunction)
+        if not name.startswith("_")
+    }
     missing = {name for name in wanted if not callable(getattr(PrintingCanon, name, None))}
     assert not missing
 
 
 def test_queue_busters_return_execute_finish(tmp_path) -> None:
     interp, _ = make(tmp_path, "G21\nT1 M6\nG38.2 Z-5 F100\nM66 P0 L0\nG0 X1\nM2\n")
-    assert run_all(interp) == [INTERP_OK, INTERP_EXECUTE_FINISH, INTERP_EXECUTE_FINISH,
-                               INTERP_EXECUTE_FINISH, INTERP_OK, INTERP_EXIT]
+    assert run_all(interp) == [
+        INTERP_OK,
+        INTERP_EXECUTE_FINISH,
+        INTERP_EXECUTE_FINISH,
+        INTERP_EXECUTE_FINISH,
+        INTERP_OK,
+        INTERP_EXIT,
+    ]
 
 
 def test_synch_after_tool_change_reloads_tool_parameters(tmp_path) -> None:
@@ -71,8 +80,9 @@ def test_synch_after_tool_change_reloads_tool_parameters(tmp_path) -> None:
 
 
 def test_positions_are_predicted_at_readahead(tmp_path) -> None:
-    interp, out = make(tmp_path, "N10 G91\nN20 G0 X10 Y-5 Z20\nN30 G1 Y20 Z-5 F100\n"
-                                 "N40 G0 Z30\nN50 M2\n")
+    interp, out = make(
+        tmp_path, "N10 G91\nN20 G0 X10 Y-5 Z20\nN30 G1 Y20 Z-5 F100\nN40 G0 Z30\nN50 M2\n"
+    )
     run_all(interp)
     moves = [c for c in calls(out) if c.startswith("STRAIGHT")]
     assert moves[0].startswith("STRAIGHT_TRAVERSE(10.0000, -5.0000, 20.0000")
@@ -81,9 +91,11 @@ def test_positions_are_predicted_at_readahead(tmp_path) -> None:
 
 
 def test_queue_buster_inside_nested_calls_keeps_the_call_going(tmp_path) -> None:
-    text = ("o<inner> sub\nT1 M6\nG0 X#1\no<inner> endsub\n"
-            "o<outer> sub\no<inner> call [#1 + 1]\no<outer> endsub\n"
-            "o<outer> call [4]\nG0 Y1\nM2\n")
+    text = (
+        "o<inner> sub\nT1 M6\nG0 X#1\no<inner> endsub\n"
+        "o<outer> sub\no<inner> call [#1 + 1]\no<outer> endsub\n"
+        "o<outer> call [4]\nG0 Y1\nM2\n"
+    )
     interp, out = make(tmp_path, text)
     statuses = run_all(interp)
     assert INTERP_EXECUTE_FINISH in statuses
@@ -132,7 +144,8 @@ def test_parameter_file_is_saved_atomically_with_backup(tmp_path) -> None:
 def test_parameter_file_out_of_order_is_an_error(tmp_path) -> None:
     (tmp_path / "p.var").write_text("5221\t1\n5161\t1\n")
     table = ToolTable()
-    interp = Interpreter(PrintingCanon(io.StringIO().write, table),
-                         parameter_file=str(tmp_path / "p.var"))
+    interp = Interpreter(
+        PrintingCanon(io.StringIO().write, table), parameter_file=str(tmp_path / "p.var")
+    )
     with pytest.raises(InterpError, match="Parameter file out of order"):
         interp.init()

@@ -21,7 +21,11 @@ def test_parse_line_reads_every_word() -> None:
     assert (entry.toolno, entry.pocketno) == (3, 7)
     assert entry.offset == [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0]
     assert (entry.diameter, entry.frontangle, entry.backangle, entry.orientation) == (
-        0.5, 10.0, 20.0, 2)
+        0.5,
+        10.0,
+        20.0,
+        2,
+    )
     assert entry.comment == "note"
 
 
