@@ -782,6 +782,8 @@ class Interpreter(
 
     # ================================================================ execute
     def execute(self, command: str | None = None) -> int:
+        if self._fast is not None and command is None:
+            return self._fast_execute()
         try:
             return self._execute(command)
         except InterpError:
