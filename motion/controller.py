@@ -20,7 +20,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-from motion.free import JogLimitError
+from motion.free import FreePlanner, JogLimitError
 from motion.homing import Homing, HomingConfig, HomingError
 from motion.joint import Joint
 from motion.kinematics import Kinematics, KinematicsError
@@ -102,6 +102,10 @@ class MotionController:
         self.axis_min_limit = [-math.inf] * NUM_AXES
         self.axis_max_limit = [math.inf] * NUM_AXES
         self.tp = planner_factory(self.axis_max_vel, self.axis_max_acc, cycle_time=period_s)
+        # teleop: one planner per world axis, as LinuxCNC 2.9 jogs axes (MOT-016, MOT-046)
+        self.axis_planners = [
+            FreePlanner(DEFAULT_JOINT_VEL, DEFAULT_JOINT_ACC) for _ in range(NUM_AXES)
+        ]
         self.mode = FREE
         self.is_enabled = False
         self.is_override_limits = False
@@ -166,8 +170,8 @@ class MotionController:
     def _abort(self, _cmd: emc.NMLmsg) -> None:
         """ABORT: always accepted, idempotent; decelerates, then empties the queue (MOT-022)."""
         self.homing.abort()
-        for joint in self.joints:
-            joint.planner.stop()
+        for planner in [*(j.planner for j in self.joints), *self.axis_planners]:
+            planner.stop()
         self.tp.abort()
         return None
 
@@ -182,7 +186,8 @@ class MotionController:
         if mode in (COORD, TELEOP) and not all(j.is_homed for j in self.joints):
             return "all joints must be homed before going into coordinated mode"
         if mode == TELEOP:
-            return "teleop mode is not supported yet"
+            for planner, value in zip(self.axis_planners, self.carte_pos_cmd, strict=True):
+                planner.reset(value)
         if mode == COORD:
             self.tp.set_position(list(self.carte_pos_cmd))
         else:
@@ -196,34 +201,46 @@ class MotionController:
             not self.tp.is_done
             or self.homing.is_homing
             or any(j.planner.is_active for j in self.joints)
+            or any(p.is_active for p in self.axis_planners)
         )
 
     # ---------------------------------------------------------------- jogs (free mode)
     def _jog(self, cmd: emc.NMLmsg) -> str | None:
-        if cmd.jjogmode != emc.JOG_MODE.JOINT:
-            return "axis (teleop) jogging is not supported yet; jog joints"
-        if self.mode != FREE:
-            return "jogging a joint needs free (joint) mode"
+        """Jog a joint in free mode, or a world axis in teleop mode (MOT-045..052)."""
         if not self.is_enabled:
             return "cannot jog with motion disabled"
-        index = cmd.joint_or_axis
-        joint = self._joint(index)
         if self.homing.is_homing:
             return "cannot jog while homing"
-        override = self.is_override_limits or not joint.is_homed
+        index = cmd.joint_or_axis
+        if cmd.jjogmode == emc.JOG_MODE.JOINT:
+            if self.mode != FREE:
+                return "jogging a joint needs free (joint) mode"
+            joint = self._joint(index)
+            planner, name = joint.planner, f"joint {index}"
+            override = self.is_override_limits or not joint.is_homed
+        else:
+            if self.mode != TELEOP:
+                return "jogging an axis needs teleop mode (teleop_enable(1) once homed)"
+            if not 0 <= index < NUM_AXES or not self._has_axis(index):
+                return f"axis {index} is not used by this machine"
+            planner, name = self.axis_planners[index], f"axis {AXIS_LETTERS[index].upper()}"
+            override = self.is_override_limits
         try:
             if isinstance(cmd, emc.EMC_JOG_STOP):
-                joint.planner.stop()
+                planner.stop()
             elif isinstance(cmd, emc.EMC_JOG_CONT):
-                joint.planner.jog_cont(cmd.vel, override)
+                planner.jog_cont(cmd.vel, override)
             elif isinstance(cmd, emc.EMC_JOG_INCR):
                 direction = math.copysign(1.0, cmd.vel) if cmd.vel else 1.0
-                joint.planner.jog_incr(cmd.incr * direction, abs(cmd.vel), override)
+                planner.jog_incr(cmd.incr * direction, abs(cmd.vel), override)
             else:
-                joint.planner.jog_abs(cmd.pos, abs(cmd.vel), override)
+                planner.jog_abs(cmd.pos, abs(cmd.vel), override)
         except JogLimitError as exc:
-            return f"joint {index}: {exc}"
+            return f"{name}: {exc}"
         return None
+
+    def _has_axis(self, index: int) -> bool:
+        return bool(getattr(self.kins, "axis_mask", 0b111) >> index & 1)
 
     # ---------------------------------------------------------------- coordinated moves
     def _require_coord(self) -> str | None:
@@ -367,6 +384,13 @@ class MotionController:
         else:
             self.axis_max_acc[axis] = cmd.acc
         self._apply_traj_limits()
+        vel, acc = self.axis_max_vel[axis], self.axis_max_acc[axis]
+        self.axis_planners[axis].set_limits(
+            vel if math.isfinite(vel) else DEFAULT_JOINT_VEL,
+            acc if math.isfinite(acc) else DEFAULT_JOINT_ACC,
+            self.axis_min_limit[axis],
+            self.axis_max_limit[axis],
+        )
         return None
 
     def _apply_traj_limits(self) -> None:
@@ -578,6 +602,8 @@ class MotionController:
             if error:
                 self.errors.append(error)
             self._set_joints_from_pose(EmcPose(*position.tolist()))
+        elif self.mode == TELEOP:
+            self._set_joints_from_pose(EmcPose(*(p.step(dt) for p in self.axis_planners)))
         else:
             self.homing.step(dt)
             error = self.homing.take_error()
@@ -587,7 +613,7 @@ class MotionController:
                 joint.pos_cmd = joint.planner.step(dt)
         for joint in self.joints:
             joint.update_command(dt)
-        if self.mode != COORD:
+        if self.mode == FREE:
             self.carte_pos_cmd = self._forward([j.pos_cmd for j in self.joints])
         self.carte_pos_fb = self._forward([j.pos_fb for j in self.joints])
         self._check_following_error()

@@ -259,9 +259,12 @@ class Task:
         return None
 
     def _teleop(self, cmd: emc.EMC_TRAJ_SET_TELEOP_ENABLE) -> str | None:
-        """Joint or world jogging in manual mode. Motion jogs joints (teleop is not there
-        yet), which on trivial kinematics are the axes; so both requests are accepted."""
-        return None
+        """Manual mode jogs joints (free) or, once homed, world axes (teleop), as LinuxCNC."""
+        problem = self._require(mode=MODE.MANUAL)
+        if problem:
+            return problem
+        mode = emc.EMC_TRAJ_MODE_ENUM.TELEOP if cmd.enable else emc.EMC_TRAJ_MODE_ENUM.FREE
+        return self._send_motion(emc.EMC_TRAJ_SET_MODE(mode=mode), is_waiting=True)
 
     def _ensure_coordinated(self) -> str | None:
         """Programs and MDI need coordinated mode, which needs homed joints (TASK-016)."""

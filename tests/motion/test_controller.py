@@ -229,3 +229,30 @@ def test_spindle_speed_changes_keep_the_direction() -> None:
     assert motion.spindles[0].speed == -1500.0
     motion.handle(emc.EMC_SPINDLE_DECREASE(spindle=0, speed=500.0))
     assert motion.spindles[0].speed == -1000.0
+
+
+def test_teleop_jogs_world_axes_through_the_kinematics() -> None:
+    motion = enabled_homed(mode=FREE)
+    axis_jog = emc.EMC_JOG_INCR(joint_or_axis=0, incr=5.0, vel=20.0, jjogmode=emc.JOG_MODE.TELEOP)
+    assert motion.handle(axis_jog) == (
+        "jogging an axis needs teleop mode (teleop_enable(1) once homed)"
+    )
+    assert motion.handle(emc.EMC_TRAJ_SET_MODE(mode=emc.EMC_TRAJ_MODE_ENUM.TELEOP)) is None
+    assert motion.handle(axis_jog) is None
+    assert motion.handle(axis_jog) is None  # cumulative, as joint jogs (MOT-048)
+    run(motion, 2000)
+    assert motion.carte_pos_cmd.x == pytest.approx(10.0)
+    assert motion.joints[0].pos_cmd == pytest.approx(10.0)  # trivkins: joint 0 is X
+    joint_jog = emc.EMC_JOG_INCR(joint_or_axis=0, incr=1.0, vel=5.0, jjogmode=emc.JOG_MODE.JOINT)
+    assert motion.handle(joint_jog) == "jogging a joint needs free (joint) mode"
+    unused = emc.EMC_JOG_CONT(joint_or_axis=4, vel=5.0, jjogmode=emc.JOG_MODE.TELEOP)
+    assert motion.handle(unused) == "axis 4 is not used by this machine"
+
+
+def test_teleop_jog_stops_at_the_axis_soft_limit() -> None:
+    motion = enabled_homed(mode=FREE)
+    motion.handle(emc.EMC_TRAJ_SET_MODE(mode=emc.EMC_TRAJ_MODE_ENUM.TELEOP))
+    assert motion.handle(emc.EMC_JOG_CONT(joint_or_axis=1, vel=-50.0, jjogmode=0)) is None
+    run(motion, 4000)
+    assert motion.carte_pos_cmd.y == pytest.approx(-100.0)
+    assert motion.is_in_position

@@ -285,3 +285,15 @@ def test_killing_a_ui_mid_program_changes_nothing(machine: Machine, procs) -> No
     machine.until(lambda s: s.interp_state == cnc.INTERP_IDLE and s.inpos, timeout=30)
     assert machine.stat.position[0] == pytest.approx(0.0, abs=1e-9)
     assert machine.stat.task_state == cnc.STATE_ON
+
+
+def test_after_homing_a_ui_jogs_axes_in_teleop_mode(machine: Machine) -> None:
+    machine.ready_to_move()
+    c = machine.command
+    c.mode(cnc.MODE_MANUAL)
+    c.wait_complete()
+    c.teleop_enable(1)
+    assert c.wait_complete() == cnc.RCS_DONE
+    c.jog(cnc.JOG_INCREMENT, False, 1, 10.0, 3.0)  # axis Y, as AXIS does once homed
+    machine.until(lambda s: s.position[1] == pytest.approx(3.0) and s.inpos)
+    assert machine.stat.motion_mode == cnc.TRAJ_MODE_TELEOP
