@@ -51,6 +51,7 @@ class Launcher:
         self.task: subprocess.Popen[bytes] | None = None
         self.display: subprocess.Popen[bytes] | None = None
         self.is_hal_loaded = False
+        self.hal_session = None
         self.is_stopping = False
 
     # ------------------------------------------------------------------ start-up
@@ -129,18 +130,25 @@ class Launcher:
         if path.suffix == ".tcl":
             raise LaunchError(f"{path}: Tcl HAL files are not supported; use halcmd syntax")
         say(f"running {path.name}")
-        self._halcmd("-f", str(path))
         self.is_hal_loaded = True
+        if self._hal().run_file(str(path)):
+            raise LaunchError(f"{path} failed (see the message above)")
 
-    def _halcmd(self, *args: str) -> None:
-        """Run halcmd; it prints its own errors (file:line: cause). Its output is not
-        captured: programs it starts with loadusr keep running and would hold a pipe open."""
-        result = subprocess.run(
-            [sys.executable, "-m", "cnc", "halcmd", "-i", self.ini_path, *args], cwd=self.folder
-        )
+    def _halcmd(self, *words: str) -> None:
+        """One halcmd command in this process's halcmd session (it prints file:line errors)."""
         self.is_hal_loaded = True
-        if result.returncode != 0:
-            raise LaunchError(f"halcmd {' '.join(args)} failed (see the message above)")
+        if not self._hal().run_words(list(words)):
+            raise LaunchError(f"halcmd {' '.join(words)} failed (see the message above)")
+
+    def _hal(self):
+        """The launcher's halcmd session, with ``[SECTION]KEY`` taken from the INI; made
+        once the realtime host runs (a halcmd process per step costs ~0.3 s each)."""
+        if self.hal_session is None:
+            from hal.halcmd import HalCmd
+
+            os.chdir(self.folder)  # HAL files name their files relative to the config
+            self.hal_session = HalCmd(ini=self.ini)
+        return self.hal_session
 
     def _start_task(self) -> None:
         say("starting task")
@@ -201,12 +209,10 @@ class Launcher:
         _terminate(self.display, "display")
         _terminate(self.task, "task", timeout=10)
         if self.is_hal_loaded and self.host is not None and self.host.poll() is None:
-            subprocess.run(
-                [sys.executable, "-m", "cnc", "halcmd", "unload", "all"],
-                cwd=self.folder,
-                stderr=subprocess.DEVNULL,
-                stdout=subprocess.DEVNULL,
-            )
+            with contextlib.suppress(Exception):  # HAL may be half made after a failed start
+                self._hal().run_words(["unload", "all"])
+        if self.hal_session is not None:
+            self.hal_session.hal.close()
         _terminate(self.host, "realtime host")
         if self.nml is not None:
             self.nml.close()

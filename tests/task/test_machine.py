@@ -297,3 +297,43 @@ def test_after_homing_a_ui_jogs_axes_in_teleop_mode(machine: Machine) -> None:
     c.jog(cnc.JOG_INCREMENT, False, 1, 10.0, 3.0)  # axis Y, as AXIS does once homed
     machine.until(lambda s: s.position[1] == pytest.approx(3.0) and s.inpos)
     assert machine.stat.motion_mode == cnc.TRAJ_MODE_TELEOP
+
+
+@pytest.mark.parametrize(
+    ("change", "expected"),
+    [
+        (
+            lambda f: (f / "mill.hal").write_text(
+                (f / "mill.hal").read_text() + "net bad nosuch.pin\n"
+            ),
+            "mill.hal:14: Pin 'nosuch.pin' does not exist",
+        ),
+        (
+            lambda f: (f / "mill.ini").write_text(
+                (f / "mill.ini").read_text().replace("HALFILE = mill.hal", "HALFILE = gone.hal")
+            ),
+            "[HAL] file not found",
+        ),
+        (
+            lambda f: (f / "mill.ini").write_text(
+                (f / "mill.ini").read_text().replace("CYCLE_TIME = 0.005", "CYCLE_TIME = fast")
+            ),
+            "mill.ini:11: [TASK]CYCLE_TIME = 'fast' is not a number",
+        ),
+    ],
+)
+def test_a_failed_start_says_where_and_leaves_nothing(
+    procs,
+    tmp_path: Path,
+    cnc_instance,
+    change,
+    expected: str,
+) -> None:
+    folder = tmp_path / "machine"
+    shutil.copytree(MACHINE, folder)
+    change(folder)
+    proc = procs.python("-m", "cnc", "run", "--headless", "mill.ini", cwd=folder)
+    assert proc.wait(timeout=60) == 1
+    assert expected in proc.stderr.read()
+    assert instance_objects(cnc_instance) == []
+    assert not subprocess.run(["pgrep", "-f", f"ini {folder}"], capture_output=True).stdout
