@@ -391,6 +391,12 @@ class Task:
     def _abort_command(self, _cmd: emc.NMLmsg) -> None:
         self._abort()
         self.operator_text("task: aborted")  # an abort is always reported (TASK-019)
+        on_abort = self.ini.find("RS274NGC", "ON_ABORT_COMMAND")
+        if on_abort and self.state == STATE.ON:
+            # [RS274NGC]ON_ABORT_COMMAND (e.g. o<on_abort> call) runs after every abort
+            outcome = self._start_mdi(on_abort)
+            if outcome is not True:
+                self.operator_error(f"ON_ABORT_COMMAND: {outcome}")
 
     def _abort(self) -> None:
         """Stop motion along the path, cancel tool changes, forget what was queued."""

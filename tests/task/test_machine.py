@@ -337,3 +337,25 @@ def test_a_failed_start_says_where_and_leaves_nothing(
     assert expected in proc.stderr.read()
     assert instance_objects(cnc_instance) == []
     assert not subprocess.run(["pgrep", "-f", f"ini {folder}"], capture_output=True).stdout
+
+
+def test_on_abort_command_runs_after_an_abort(procs, tmp_path: Path) -> None:
+    folder = tmp_path / "machine"
+    shutil.copytree(MACHINE, folder)
+    ini = folder / "mill.ini"
+    ini.write_text(ini.read_text().replace("[RS274NGC]\n", "[RS274NGC]\nON_ABORT_COMMAND = M9\n"))
+    proc = procs.python("-m", "cnc", "run", "--headless", "mill.ini", cwd=folder)
+    machine = Machine(proc, folder)
+    try:
+        machine.wait_ready()
+        machine.ready_to_move()
+        c = machine.command
+        c.mdi("M8")
+        c.wait_complete()
+        machine.until(lambda s: s.flood == cnc.FLOOD_ON)
+        c.abort()
+        c.wait_complete()
+        machine.until(lambda s: s.flood == cnc.FLOOD_OFF)  # the M9 of ON_ABORT_COMMAND
+    finally:
+        proc.send_signal(signal.SIGTERM)
+        proc.wait(timeout=30)
