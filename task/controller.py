@@ -39,7 +39,13 @@ from nml.channels import (
 )
 from nml.errors import NmlError
 from nml.message import RCS_STATUS, MessageKind
-from task.interp.errors import INTERP_ENDFILE, INTERP_EXECUTE_FINISH, INTERP_EXIT, InterpError
+from task.interp.errors import (
+    INTERP_ENDFILE,
+    INTERP_EXECUTE_FINISH,
+    INTERP_EXIT,
+    INTERP_OK,
+    InterpError,
+)
 from task.setup import MachineSetup, load_setup
 
 log = logging.getLogger("task")
@@ -114,6 +120,7 @@ class Task:
         self.checked_motion_serial = 0
         self.file = ""
         self.system_command: subprocess.Popen[bytes] | None = None
+        self.first_line = 0  # run from line: the lines before it are only interpreted
         self.handlers: dict[type, Callable[[emc.NMLmsg], str | bool | None]] = {
             emc.EMC_TASK_SET_STATE: self._set_state,
             emc.EMC_TASK_SET_MODE: self._set_mode,
@@ -335,8 +342,6 @@ class Task:
         problem = self._ensure_coordinated()
         if problem:
             return problem
-        if cmd.line > 1:
-            return "run from line is not supported yet; run from the start"
         self.interp.close()
         self.interp.open(self.file)
         self.canon.set_status(self.stat)
@@ -346,6 +351,7 @@ class Task:
         self.is_paused = False
         self.is_reading_done = False
         self.is_waiting_for_synch = False
+        self.first_line = cmd.line
         return None
 
     def _pause(self, _cmd: emc.NMLmsg) -> str | None:
@@ -436,7 +442,11 @@ class Task:
                     if status == INTERP_ENDFILE:
                         self.is_reading_done = True
                         break
+                    is_skipped = self.interp.sequence_number < self.first_line
                     status = self.interp.execute()
+                    if is_skipped:  # run from line: interpreted for its state, not carried out
+                        self.queue.clear()
+                        status = INTERP_OK if status == INTERP_EXECUTE_FINISH else status
                     if status == INTERP_EXIT:
                         self.is_reading_done = True
             except InterpError as exc:

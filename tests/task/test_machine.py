@@ -359,3 +359,20 @@ def test_on_abort_command_runs_after_an_abort(procs, tmp_path: Path) -> None:
     finally:
         proc.send_signal(signal.SIGTERM)
         proc.wait(timeout=30)
+
+
+def test_run_from_line_skips_what_comes_before_it(machine: Machine) -> None:
+    program = machine.folder / "lines.ngc"
+    program.write_text("G21 G90\nM8\nG0 X10\nG0 Y5\nM2\n")  # line 4 is "G0 Y5"
+    machine.ready_to_move()
+    c = machine.command
+    c.mode(cnc.MODE_AUTO)
+    c.wait_complete()
+    c.program_open(str(program))
+    c.wait_complete()
+    c.auto(cnc.AUTO_RUN, 4)
+    machine.until(lambda s: s.interp_state != cnc.INTERP_IDLE, timeout=5)
+    machine.until(lambda s: s.interp_state == cnc.INTERP_IDLE and s.inpos, timeout=20)
+    s = machine.stat
+    assert s.position[:2] == pytest.approx((10.0, 5.0))  # the state of the skipped lines counts
+    assert s.flood == cnc.FLOOD_OFF  # but their M8 was not carried out
