@@ -121,6 +121,8 @@ class Task:
         self.file = ""
         self.system_command: subprocess.Popen[bytes] | None = None
         self.first_line = 0  # run from line: the lines before it are only interpreted
+        self.is_stepping = False  # AUTO_STEP: one line at a time
+        self.step_lines = 0
         self.handlers: dict[type, Callable[[emc.NMLmsg], str | bool | None]] = {
             emc.EMC_TASK_SET_STATE: self._set_state,
             emc.EMC_TASK_SET_MODE: self._set_mode,
@@ -352,6 +354,7 @@ class Task:
         self.is_reading_done = False
         self.is_waiting_for_synch = False
         self.first_line = cmd.line
+        self.is_stepping = False
         return None
 
     def _pause(self, _cmd: emc.NMLmsg) -> str | None:
@@ -361,16 +364,26 @@ class Task:
         return self._send_motion(emc.EMC_TRAJ_PAUSE())
 
     def _resume(self, _cmd: emc.NMLmsg) -> str | None:
+        self.is_stepping = False
         if not self.is_paused:
             return None
         self.is_paused = False
         return self._send_motion(emc.EMC_TRAJ_RESUME())
 
-    def _step(self, _cmd: emc.NMLmsg) -> str | None:
-        if self.run is not Run.PROGRAM:
-            return "step needs a running program"
-        self.is_paused = True
-        return self._send_motion(emc.EMC_TRAJ_STEP())
+    def _step(self, cmd: emc.NMLmsg) -> str | None:
+        """AUTO_STEP: carry out the next line, then pause (from idle: start the program)."""
+        if self.run is Run.IDLE:
+            problem = self._run_program(emc.EMC_TASK_PLAN_RUN(line=0))
+            if problem:
+                return problem
+        elif self.run is not Run.PROGRAM:
+            return "step needs a program (AUTO mode)"
+        self.is_stepping = True
+        self.step_lines = 1
+        if self.is_paused:
+            self.is_paused = False
+            return self._send_motion(emc.EMC_TRAJ_RESUME())
+        return None
 
     def _plan_init(self, _cmd: emc.NMLmsg) -> str | None:
         if self.run is not Run.IDLE:
@@ -415,6 +428,7 @@ class Task:
             self.interp.reset()
         self.run = Run.IDLE
         self.is_paused = False
+        self.is_stepping = False
         self.is_reading_done = True
         self.is_waiting_for_synch = False
         self.delay_until = 0.0
@@ -423,7 +437,13 @@ class Task:
     # ================================================================ planning
     def _plan(self) -> None:
         """Read ahead while a program or MDI command runs (TASK-006..010)."""
-        if self.run is Run.IDLE or self.is_reading_done or self.is_paused:
+        if self.run is Run.IDLE or self.is_paused:
+            return
+        if self.is_stepping and not self.step_lines:
+            if not self.queue and self._is_everything_done():
+                self.is_paused = True  # the stepped line is done: wait for the next step
+            return
+        if self.is_reading_done:
             return
         if self.is_waiting_for_synch:
             if not self._is_everything_done():
@@ -444,6 +464,8 @@ class Task:
                         break
                     is_skipped = self.interp.sequence_number < self.first_line
                     status = self.interp.execute()
+                    if self.is_stepping and not is_skipped and self.queue:
+                        self.step_lines = 0  # one line that does something, per step
                     if is_skipped:  # run from line: interpreted for its state, not carried out
                         self.queue.clear()
                         status = INTERP_OK if status == INTERP_EXECUTE_FINISH else status
@@ -454,6 +476,8 @@ class Task:
                 return
             if status == INTERP_EXECUTE_FINISH:
                 self.is_waiting_for_synch = True
+                return
+            if self.is_stepping and not self.step_lines:
                 return
 
     def _program_error(self, text: str) -> None:

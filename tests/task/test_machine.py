@@ -376,3 +376,24 @@ def test_run_from_line_skips_what_comes_before_it(machine: Machine) -> None:
     s = machine.stat
     assert s.position[:2] == pytest.approx((10.0, 5.0))  # the state of the skipped lines counts
     assert s.flood == cnc.FLOOD_OFF  # but their M8 was not carried out
+
+
+def test_step_carries_out_one_line_at_a_time(machine: Machine) -> None:
+    program = machine.folder / "steps.ngc"
+    program.write_text("G21 G90\nG0 X5\nG0 Y5\nG0 X0\nM2\n")
+    machine.ready_to_move()
+    c, s = machine.command, machine.stat
+    c.mode(cnc.MODE_AUTO)
+    c.wait_complete()
+    c.program_open(str(program))
+    c.wait_complete()
+    seen = []
+    for _ in range(3):
+        c.auto(cnc.AUTO_STEP)
+        c.wait_complete()
+        machine.until(lambda s: s.interp_state == cnc.INTERP_PAUSED and s.inpos, timeout=10)
+        seen.append(tuple(round(v, 6) for v in s.position[:2]))
+    assert seen == [(5.0, 0.0), (5.0, 5.0), (0.0, 5.0)]
+    c.auto(cnc.AUTO_RESUME)
+    c.wait_complete()
+    machine.until(lambda s: s.interp_state == cnc.INTERP_IDLE, timeout=10)
