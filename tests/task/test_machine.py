@@ -12,6 +12,7 @@ import os
 import shutil
 import signal
 import subprocess
+import sys
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -397,3 +398,16 @@ def test_step_carries_out_one_line_at_a_time(machine: Machine) -> None:
     c.auto(cnc.AUTO_RESUME)
     c.wait_complete()
     machine.until(lambda s: s.interp_state == cnc.INTERP_IDLE, timeout=10)
+
+
+def test_opening_the_estop_chain_puts_the_machine_in_estop(machine: Machine) -> None:
+    machine.ready_to_move()
+    machine.messages(0.05)
+    for words in (
+        ["unlinkp", "iocontrol.0.emc-enable-in"],
+        ["setp", "iocontrol.0.emc-enable-in", "0"],
+    ):
+        done = subprocess.run([sys.executable, "-m", "cnc", "halcmd", *words], capture_output=True)
+        assert done.returncode == 0, done.stderr
+    machine.until(lambda s: s.task_state == cnc.STATE_ESTOP and not s.enabled, timeout=10)
+    assert any("E-stop" in text for _, text in machine.messages())
