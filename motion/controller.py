@@ -451,6 +451,17 @@ class MotionController:
         planner.set_limits(max_vel, max_acc, min_limit, max_limit)
         return None
 
+    def _motor_offset(self, cmd: emc.EMC_JOINT_SET_MOTOR_OFFSET) -> str | None:
+        """Where the joint is, from the saved position file: no motor moves (MOT-005)."""
+        joint = self._joint(cmd.joint)
+        if self.is_enabled or joint.is_homed:
+            return "the motor offset can only be set while motion is off and unhomed"
+        joint.motor_offset = cmd.offset
+        joint.update_feedback(joint.motor_pos_fb)
+        joint.hold_position()
+        joint.update_command(self.period_s)
+        return None
+
     def _homing_params(self, cmd: emc.EMC_JOINT_SET_HOMING_PARAMS) -> str | None:
         """[JOINT_n] homing keys, sent by task at start-up (MOT-043)."""
         index = cmd.joint
@@ -770,6 +781,7 @@ _HANDLERS: dict[type, Callable[[MotionController, emc.NMLmsg], str | None]] = {
     emc.EMC_AXIS_SET_MAX_VELOCITY: MotionController._axis_settings,
     emc.EMC_AXIS_SET_MAX_ACCELERATION: MotionController._axis_settings,
     emc.EMC_JOINT_SET_HOMING_PARAMS: MotionController._homing_params,
+    emc.EMC_JOINT_SET_MOTOR_OFFSET: MotionController._motor_offset,
     emc.EMC_JOINT_HOME: MotionController._home,
     emc.EMC_JOINT_UNHOME: MotionController._unhome,
     emc.EMC_JOINT_OVERRIDE_LIMITS: MotionController._override_limits,

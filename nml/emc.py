@@ -426,6 +426,13 @@ class EMC_JOINT_SET_MAX_VELOCITY(EMC_JOINT_CMD_MSG, type_id=116):
     vel: f64
 
 
+class EMC_JOINT_SET_MOTOR_OFFSET(EMC_JOINT_CMD_MSG, type_id=130):
+    """Motor position of joint position 0; task sets it from [TRAJ]POSITION_FILE at start
+    so the machine reappears where it was (LinuxCNC writes it into motion's memory)."""
+
+    offset: f64
+
+
 class EMC_JOINT_SET_MAX_ACCELERATION(EMC_JOINT_CMD_MSG, type_id=117):
     """[JOINT_n]MAX_ACCELERATION. Not an NML message in LinuxCNC 2.9, where task writes it
     straight into motion's shared memory; here every task -> motion command is NML."""

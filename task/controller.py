@@ -146,11 +146,30 @@ class Task:
 
     # ================================================================ main loop
     def start(self) -> None:
-        """Tell motion the machine's limits, then publish the first status."""
-        for msg in self.setup.motion_init_messages():
+        """Tell motion the machine's limits and where it was, then publish the first status."""
+        for msg in self.setup.motion_init_messages() + self._saved_positions():
             self._send_motion(msg)
+        self._await(MOTION_STATUS, "motion", self.last_motion_serial, timeout=5.0)
         self.refresh()
         self.publish()
+
+    def _saved_positions(self) -> list[emc.NMLmsg]:
+        """[TRAJ]POSITION_FILE: one joint position per line (LinuxCNC's format)."""
+        path = self.setup.position_file
+        if not path:
+            return []
+        try:
+            with open(path, encoding="utf-8") as handle:
+                values = [float(line) for line in handle.read().split()]
+        except FileNotFoundError:
+            return []
+        except (OSError, ValueError) as exc:
+            self.operator_error(f"{path}: cannot read saved positions ({exc}); ignored")
+            return []
+        return [
+            emc.EMC_JOINT_SET_MOTOR_OFFSET(joint=index, offset=-value)
+            for index, value in enumerate(values[: len(self.setup.joints)])
+        ]
 
     def cycle(self) -> None:
         """One pass of the loop: waits for a command at most CYCLE_TIME, or one servo
@@ -723,8 +742,8 @@ class Task:
         except InterpError as exc:
             log.error("saving parameters failed: %s", exc)
         if self.setup.position_file:
-            joints = self.stat.motion.joint
-            text = "".join(f"{joints[i].output:.6f}\n" for i in range(len(self.setup.joints)))
+            joints = self.stat.motion.joint  # all 16, as LinuxCNC writes them
+            text = "".join(f"{joints[i].output:.17f}\n" for i in range(len(joints)))
             try:
                 atomic_write_text(self.setup.position_file, text)
             except OSError as exc:

@@ -272,6 +272,7 @@ def leaves(values: Any, path: str = "") -> Iterator[tuple[str, Any]]:
 # sending as NML messages; here they are NML messages too, in free numbers of their group.
 OUR_TYPES = {
     "EMC_JOINT_SET_MAX_ACCELERATION": 117,
+    "EMC_JOINT_SET_MOTOR_OFFSET": 130,
     "EMC_AXIS_SET_MIN_POSITION_LIMIT": 141,
     "EMC_AXIS_SET_MAX_POSITION_LIMIT": 142,
     "EMC_AXIS_SET_MAX_VELOCITY": 143,

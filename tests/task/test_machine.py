@@ -411,3 +411,26 @@ def test_opening_the_estop_chain_puts_the_machine_in_estop(machine: Machine) -> 
         assert done.returncode == 0, done.stderr
     machine.until(lambda s: s.task_state == cnc.STATE_ESTOP and not s.enabled, timeout=10)
     assert any("E-stop" in text for _, text in machine.messages())
+
+
+def test_the_machine_reappears_where_it_was_after_a_restart(procs, tmp_path: Path) -> None:
+    folder = tmp_path / "machine"
+    shutil.copytree(MACHINE, folder)
+    first = procs.python("-m", "cnc", "run", "--headless", "mill.ini", cwd=folder)
+    machine = Machine(first, folder)
+    machine.wait_ready()
+    machine.ready_to_move()
+    machine.command.mdi("G0 X12.5 Y-3")
+    machine.command.wait_complete(10)
+    first.send_signal(signal.SIGTERM)
+    assert first.wait(timeout=30) == 0
+    assert len((folder / "position.txt").read_text().split()) == 16  # LinuxCNC's format
+    second = procs.python("-m", "cnc", "run", "--headless", "mill.ini", cwd=folder)
+    machine = Machine(second, folder)
+    try:
+        machine.wait_ready()
+        machine.until(lambda s: s.joint_actual_position[:2] == pytest.approx((12.5, -3.0)))
+        assert not any(machine.stat.homed[:3])  # where it was, but not homed
+    finally:
+        second.send_signal(signal.SIGTERM)
+        second.wait(timeout=30)
