@@ -394,6 +394,12 @@ class ShmBuffer:
             pass
         self._last_seen = self._get("write_count")
 
+    def is_orphaned(self) -> bool:
+        """The master that made this buffer is gone: what it holds is left over."""
+        self._require_open()
+        creator = self._get("creator_pid")
+        return creator != os.getpid() and not is_process_alive(creator)
+
     def connections(self) -> list[tuple[int, int]]:
         """(pid, c_num) of every process attached now."""
         self._require_open()

@@ -20,6 +20,7 @@ from __future__ import annotations
 import functools
 import os
 import sys
+import time
 import weakref
 from pathlib import Path
 
@@ -87,6 +88,9 @@ def is_running(buffer: str) -> bool:
     return True
 
 
+LIVENESS_CHECK_S = 0.2  # how often a link checks that the controller still runs
+
+
 class Link:
     """The buffers of one API object, attached on first use, detached by ``close()``.
 
@@ -98,12 +102,22 @@ class Link:
         self.nml_path = resolve_nml_file(source)
         self.config = load_nml(self.nml_path)
         self._buffers: dict[str, ShmBuffer] = {}
+        self._checked_at = 0.0
 
     def close_with(self, owner: object) -> None:
         weakref.finalize(owner, self.close)
 
     def buffer(self, name: str) -> ShmBuffer:
-        """The attached buffer ``name``; ``cnc.error`` if the controller is not running."""
+        """The attached buffer ``name``; ``cnc.error`` if the controller is not running.
+
+        Every LIVENESS_CHECK_S the buffers are checked: once the controller has stopped
+        they are dropped (the next use says it is not running, or attaches to the buffers
+        of a controller started since), so a UI never shows a frozen machine."""
+        now = time.monotonic()
+        if now - self._checked_at > LIVENESS_CHECK_S:
+            self._checked_at = now
+            if any(buffer.is_orphaned() for buffer in self._buffers.values()):
+                self.close()
         found = self._buffers.get(name)
         if found is None:
             found = self._buffers[name] = self._attach(name)
@@ -123,9 +137,13 @@ class Link:
                 f"NML file {self.nml_path})"
             )
         try:
-            return ShmBuffer(self.config.buffers[name], self.config.process(UI_PROCESS, name))
+            buffer = ShmBuffer(self.config.buffers[name], self.config.process(UI_PROCESS, name))
         except NmlError as exc:
             raise error(str(exc)) from None
+        if buffer.is_orphaned():
+            buffer.close()
+            raise error(f"{name}: the controller is not running (its buffers were left over)")
+        return buffer
 
     def close(self) -> None:
         for buffer in self._buffers.values():
