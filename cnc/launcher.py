@@ -72,6 +72,14 @@ class Launcher:
         self.nml = Nml(config, _master_process(config))
         os.environ["CNC_NML_FILE"] = nml_file
         os.environ["CNC_INI_FILE"] = self.ini_path
+        # replaceable trajectory planner and homing modules, read by motmod (ARCH-008)
+        for section, key, env in (
+            ("TRAJ", "TPMOD", "CNC_TPMOD"),
+            ("EMCMOT", "HOMEMOD", "CNC_HOMEMOD"),
+        ):
+            value = (self.ini.find(section, key) or "").strip()
+            if value:
+                os.environ[env] = value
         self._start_host()
         if self.ini.find("EMCIO", "EMCIO"):
             say("starting iocontrol")

@@ -79,6 +79,7 @@ class MotionController:
         num_dio: int = 4,
         num_aio: int = 4,
         planner_factory: Callable[..., TrajectoryPlanner] = TrajectoryPlanner,
+        homing_class: type[Homing] = Homing,
     ) -> None:
         if not 1 <= num_joints <= emc.EMCMOT_MAX_JOINTS:
             raise ValueError(f"num_joints must be 1..{emc.EMCMOT_MAX_JOINTS}, got {num_joints}")
@@ -90,8 +91,9 @@ class MotionController:
         self.period_s = period_s
         self.joints = [Joint(DEFAULT_JOINT_VEL, DEFAULT_JOINT_ACC) for _ in range(num_joints)]
         self.is_faulted = [False] * num_joints
+        self.homing_class = homing_class  # ARCH-007/008: default or a user's homing module
         self.homing_configs = [HomingConfig() for _ in range(num_joints)]
-        self.homing = Homing(self.joints, self.homing_configs)
+        self.homing = self.homing_class(self.joints, self.homing_configs)
         self.spindles = [Spindle() for _ in range(num_spindles)]
         self.digital_out = [False] * num_dio
         self.analog_out = [0.0] * num_aio
@@ -483,7 +485,7 @@ class MotionController:
             volatile_home=bool(cmd.volatile_home),
             locking_indexer=bool(cmd.locking_indexer),
         )
-        self.homing = Homing(self.joints, self.homing_configs)
+        self.homing = self.homing_class(self.joints, self.homing_configs)
         return None
 
     def _home(self, cmd: emc.EMC_JOINT_HOME) -> str | None:

@@ -27,8 +27,11 @@ from typing import Any
 from hal.api import RtComponent, pin
 from hal.core import HalError
 from motion.controller import COORD, TELEOP, Inputs, MotionController
+from motion.homing import load_homing
 from motion.kinematics import KinematicsError, load_kinematics
+from motion.modules import ModuleInterfaceError
 from motion.pose import AXIS_LETTERS
+from motion.tp import load_planner
 from nml import emc
 from nml.channels import EMC_ERROR, MOTION_COMMAND, MOTION_STATUS, Nml, load_config
 from nml.errors import NmlError, NmlTimeoutError
@@ -102,14 +105,20 @@ class Motmod:
         options = _options(args)
         kins = _kinematics(host)
         period_s = options["servo_period_nsec"] / 1e9
-        self.controller = MotionController(
-            kins,
-            options["num_joints"],
-            period_s,
-            num_spindles=options["num_spindles"],
-            num_dio=options["num_dio"],
-            num_aio=options["num_aio"],
-        )
+        planner, homing = _modules(args)
+        try:
+            self.controller = MotionController(
+                kins,
+                options["num_joints"],
+                period_s,
+                num_spindles=options["num_spindles"],
+                num_dio=options["num_dio"],
+                num_aio=options["num_aio"],
+                planner_factory=planner,
+                homing_class=homing,
+            )
+        except ValueError as exc:
+            raise HalError(f"motmod: {exc}") from None
         hal = host.hal
         io = {"num_dio": options["num_dio"], "num_aio": options["num_aio"]}
         self.motion = MotionPins.create(hal, comp, "motion", io)
@@ -265,13 +274,34 @@ _LIMITS = {
 }
 
 
+# Replaceable modules (ARCH-007/008): motmod's tp=/hm= arguments, else what the launcher
+# took from [TRAJ]TPMOD / [EMCMOT]HOMEMOD; LinuxCNC's default names mean ours.
+_MODULE_OPTIONS = {
+    "tp": ("CNC_TPMOD", "tpmod", "planner"),
+    "hm": ("CNC_HOMEMOD", "homemod", "homing"),
+}
+
+
+def _modules(args: dict[str, str]) -> tuple[type, type]:
+    """The trajectory planner and homing classes; an incomplete module is refused with
+    the list of what it lacks."""
+    names = {}
+    for key, (env, linuxcnc_default, ours) in _MODULE_OPTIONS.items():
+        name = args.get(key) or os.environ.get(env) or ours
+        names[key] = ours if name == linuxcnc_default else name
+    try:
+        return load_planner(names["tp"]), load_homing(names["hm"])
+    except ModuleInterfaceError as exc:
+        raise HalError(f"motmod: {exc}") from None
+
+
 def _options(args: dict[str, str]) -> dict[str, int]:
-    unknown = set(args) - set(_INT_OPTIONS)
+    unknown = set(args) - set(_INT_OPTIONS) - set(_MODULE_OPTIONS)
     if unknown:
         raise HalError(f"motmod: unknown argument '{sorted(unknown)[0]}'")
     options = dict(_INT_OPTIONS)
     for key, text in args.items():
-        if key in _INT_OPTIONS:
+        if key in _INT_OPTIONS:  # (tp= and hm= are module names, see _modules)
             try:
                 options[key] = int(text, 0)
             except ValueError:

@@ -176,3 +176,33 @@ def test_joint_jog_moves_the_motor_pin(machine: Task) -> None:
     assert stat.joint[1].output == pytest.approx(2.5)
     assert pin("joint.1.motor-pos-cmd") == pytest.approx(2.5)
     assert settled_pin("joint.1.pos-fb", 2.5) == pytest.approx(2.5)
+
+
+def test_replaceable_modules_are_checked_when_motmod_loads(
+    procs, tmp_path: Path, monkeypatch
+) -> None:
+    """ARCH-008: tp=/hm= (or [TRAJ]TPMOD / [EMCMOT]HOMEMOD) name the modules; an incomplete
+    replacement is refused with everything it lacks."""
+    (tmp_path / "mytp.py").write_text(
+        "class Planner:\n    def add_line(self, *args):\n        pass\n"
+    )
+    (tmp_path / "goodhoming.py").write_text("from motion.homing.homing import Homing\n")
+    monkeypatch.setenv("PYTHONPATH", str(tmp_path))
+    task = Task()
+    host = procs.python("-m", "hal.rtapi_app", "--no-rt", env={"PYTHONPATH": f"{tmp_path}"})
+    try:
+        assert host.stdout.readline().strip() == "rtapi_app: ready"
+        assert run_cnc("halcmd", "loadrt", "trivkins", "coordinates=XYZ").returncode == 0
+        mismatch = run_cnc("halcmd", "loadrt", "motmod", "num_joints=2")
+        assert "motmod: kinematics maps 3 joints, motmod has 2" in mismatch.stderr
+        refused = run_cnc("halcmd", "loadrt", "motmod", "tp=mytp")
+        assert refused.returncode != 0
+        assert "trajectory planner module 'mytp' is incomplete: missing" in refused.stderr
+        assert "abort" in refused.stderr and "add_circle" in refused.stderr
+        loaded = run_cnc("halcmd", "loadrt", "motmod", "hm=goodhoming")
+        assert loaded.returncode == 0, loaded.stderr
+    finally:
+        run_cnc("halcmd", "unload", "all")
+        host.send_signal(signal.SIGTERM)
+        host.wait(timeout=10)
+        task.close()
