@@ -7,6 +7,7 @@ answering commands as task does) and collects what it prints.
 
 from __future__ import annotations
 
+import json
 import queue
 import threading
 from collections.abc import Callable, Iterator
@@ -61,9 +62,14 @@ class FakeTask:
 
     def next_command(self) -> dict[str, Any]:
         """The next command the fake task received: {"type": name, "fields": {...}}."""
-        import json
-
         return json.loads(self.next_line())
+
+    def received(self) -> list[dict[str, Any]]:
+        """Every command received so far and not yet taken by next_command."""
+        found = []
+        while not self._lines.empty():
+            found.append(json.loads(self._lines.get()))
+        return found
 
 
 @pytest.fixture

@@ -10,7 +10,7 @@ import pytest
 from cnc.ui import formatting as fmt
 from cnc.ui.sh import split_commands
 from cnc.ui.top import display_interval
-from tests.ui.fake_task import G_CODES, M_CODES
+from tests.api.fake_task import G_CODES, M_CODES
 
 
 @pytest.mark.parametrize(

@@ -18,8 +18,8 @@ from cnc.ui.controller import Controller
 from cnc.ui.top import snapshot, status_screen
 from nml import emc
 from nml.channels import EMC_COMMAND, EMC_ERROR, EMC_STATUS, Nml, load_config
+from tests.api.fake_task import machine_status
 from tests.ui.conftest import UI_MAIN, WAIT_S, read_until
-from tests.ui.fake_task import machine_status
 
 
 def test_once_shows_the_state_and_positions_the_task_publishes(fake_task, run_ui) -> None:
