@@ -196,6 +196,7 @@ class Interpreter(
         self._file_cache: dict[str, list[str]] = {}
         self._compiled: dict = {}  # (line, position) -> compiled value (see compiled.py)
         self._compiler = Compiler(self)
+        self._o_slots = [0.0] * 8  # the value stack O-word expressions share
 
     def _get_linetext(self) -> str:
         return self.linetext

@@ -214,6 +214,8 @@ class ReaderMixin:
 
     def read_integer_value(self, line: str, counter: int) -> tuple[int, int]:
         value, counter = self.read_real_value(line, counter)
+        if value is STALE:
+            value = 0.0  # an uninitialised local in LinuxCNC
         ivalue = math.floor(value)
         if value - ivalue > 0.9999:
             ivalue = math.ceil(value)
@@ -594,7 +596,8 @@ class ReaderMixin:
             if exists:
                 return value, counter
             if self.defining_sub:
-                return 0.0, counter
+                # LinuxCNC leaves the value it was to be read into as it was (see STALE)
+                return STALE, counter
             raise InterpError(f"Named parameter #<{name}> not defined")
         index, counter = self.read_integer_value(line, counter)
         if check_exists:
@@ -612,7 +615,7 @@ class ReaderMixin:
             return float(match.group()), match.end()
         # a value read a second time at the same place is compiled (see compiled.py)
         key = (line, counter)
-        entry = self._compiled.get(key)
+        entry = self._compiled.get(key) if not self.defining_sub else _NEVER
         if entry is None:
             self._compiled[key] = _SEEN
         elif entry is _SEEN:
@@ -634,7 +637,8 @@ class ReaderMixin:
             value, counter = self.read_real_value(line, counter + 1)
         elif c == "-" and c1 and not c1.isdigit() and c1 != ".":
             value, counter = self.read_real_value(line, counter + 1)
-            value = -value
+            if value is not STALE:
+                value = -value
         elif "a" <= c <= "z":
             value, counter = self.read_unary(line, counter)
         else:
@@ -657,30 +661,44 @@ class ReaderMixin:
         return float(text), span.end()
 
     def read_expression_cached(self, line: str, counter: int) -> tuple[float, int]:
-        """read_real_expression, compiled the second time it is read (O-word lines)."""
-        key = (line, -counter - 1)  # apart from read_real_value's keys: no NaN check
-        entry = self._compiled.get(key)
-        if entry is None:
-            self._compiled[key] = _SEEN
-        elif entry is _SEEN:
-            entry = self._compiler.expression(line, counter)
-            self._compiled[key] = entry if entry is not None else _NEVER
-            if entry is not None:
-                return entry[0](), entry[1]
-        elif entry is not _NEVER:
-            return entry[0](), entry[1]
-        return self.read_real_expression(line, counter)
+        """read_real_expression for O-word lines, compiled the second time it is read.
 
-    def read_real_expression(self, line: str, counter: int) -> tuple[float, int]:
+        O-word expressions share one value stack (``_o_slots``), as they share one stack
+        frame in LinuxCNC: an undefined parameter read while a definition is skipped leaves
+        the slot holding what the previous O-word expression left there.
+        """
+        slots = self._o_slots
+        if not self.defining_sub:
+            key = (line, -counter - 1)  # apart from read_real_value's keys: no NaN check
+            entry = self._compiled.get(key)
+            if entry is None:
+                self._compiled[key] = _SEEN
+            elif entry is _SEEN:
+                entry = self._compiler.expression(line, counter)
+                self._compiled[key] = entry if entry is not None else _NEVER
+            if entry is not None and entry is not _SEEN and entry is not _NEVER:
+                value = entry[0]()
+                slots[0] = value
+                return value, entry[1]
+        return self.read_real_expression(line, counter, slots)
+
+    def read_real_expression(
+        self, line: str, counter: int, values: list | None = None
+    ) -> tuple[float, int]:
         counter += 1
-        values = [0.0] * 8
+        if values is None:
+            values = [0.0] * 8
         operators = [0] * 8
-        values[0], counter = self.read_real_value(line, counter)
+        value, counter = self.read_real_value(line, counter)
+        if value is not STALE:
+            values[0] = value
         operators[0], counter = self.read_operation(line, counter)
         stack_index = 1
         prec = _PRECEDENCE
         while operators[0] != RIGHT_BRACKET:
-            values[stack_index], counter = self.read_real_value(line, counter)
+            value, counter = self.read_real_value(line, counter)
+            if value is not STALE:
+                values[stack_index] = value
             operators[stack_index], counter = self.read_operation(line, counter)
             if prec[operators[stack_index]] > prec[operators[stack_index - 1]]:
                 stack_index += 1
@@ -779,6 +797,7 @@ class ReaderMixin:
         return _execute_unary(value, operation), counter
 
 
+STALE = object()  # "left as it was": see read_parameter and read_real_expression
 _SEEN = object()  # compiled-value cache: read once so far
 _NEVER = object()  # compiled-value cache: cannot be compiled
 
