@@ -701,6 +701,9 @@ class MotionController:
         traj.kinematics_type = int(self.kins.kinematics_type())
         traj.distance_to_go = self.tp.distance_to_go if self.mode == COORD else 0.0
         traj.current_vel = self.tp.vel if self.mode == COORD else 0.0
+        move = self.tp.current_move if self.mode == COORD else None
+        traj.motion_type = _motion_type(move)
+        traj.probing = move is not None and move.probe is not None
         traj.feed_override_enabled = self.is_feed_override_enabled
         traj.feed_hold_enabled = self.is_feed_hold_enabled
         traj.adaptive_feed_enabled = self.is_adaptive_feed_enabled
@@ -730,6 +733,17 @@ class MotionController:
         stat.synch_di[: len(self.digital_in)] = self.digital_in
         stat.analog_output[: len(self.analog_out)] = self.analog_out
         stat.analog_input[: len(self.analog_in)] = self.analog_in
+
+
+def _motion_type(move) -> int:
+    """EMC_TRAJ_STAT.motion_type of the move being executed (0: none)."""
+    if move is None:
+        return 0
+    if move.probe is not None:
+        return emc.EMC_MOTION_TYPE.PROBING
+    if move.is_rapid:
+        return emc.EMC_MOTION_TYPE.TRAVERSE
+    return emc.EMC_MOTION_TYPE.FEED if move.line is not None else emc.EMC_MOTION_TYPE.ARC
 
 
 def _pose(pose: emc.EmcPose) -> EmcPose:

@@ -177,6 +177,11 @@ class TrajectoryPlanner:
         return self.queue_size - len(self._moves)
 
     @property
+    def current_move(self) -> Move | None:
+        """The move being executed (None when the queue is empty)."""
+        return self._moves[0] if self._moves else None
+
+    @property
     def is_full(self) -> bool:
         return len(self._moves) >= self.queue_size
 

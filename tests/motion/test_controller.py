@@ -256,3 +256,15 @@ def test_teleop_jog_stops_at_the_axis_soft_limit() -> None:
     run(motion, 4000)
     assert motion.carte_pos_cmd.y == pytest.approx(-100.0)
     assert motion.is_in_position
+
+
+def test_status_tells_which_kind_of_move_runs() -> None:
+    motion = enabled_homed()
+    motion.handle(move(20.0, rapid=True))
+    run(motion, 5)
+    stat = emc.EMC_MOTION_STAT()
+    motion.fill_status(stat)
+    assert stat.traj.motion_type == emc.EMC_MOTION_TYPE.TRAVERSE and not stat.traj.probing
+    run(motion, 3000)
+    motion.fill_status(stat)
+    assert stat.traj.motion_type == 0  # nothing left to do
