@@ -474,6 +474,8 @@ class ReaderMixin:
             else:
                 onumber, counter = self.read_integer_value(line, counter)
                 oname = str(onumber)
+                # reading a number overwrites the stack LinuxCNC's stale value came from
+                self._o_slots[0] = 0.0
             keyword = _O_KEYWORD.match(line, counter)
             if keyword is not None:
                 block.o_type = _O_TYPES[keyword.group()]
