@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import ctypes
 import os
 import shlex
 import signal
@@ -32,6 +33,7 @@ from nml.errors import NmlError
 from nml.ipcnames import INSTANCE_ENV, current_instance, remove_instance_objects
 
 READY_TIMEOUT_S = 20.0
+PR_SET_PDEATHSIG = 1
 # [DISPLAY]DISPLAY values that are our own user interfaces (anything else is run as given)
 OUR_DISPLAYS = {"top": ["top"], "sh": ["sh"], "web": ["ui", "web"]}
 
@@ -52,17 +54,19 @@ class Launcher:
         self.display: subprocess.Popen[bytes] | None = None
         self.is_hal_loaded = False
         self.hal_session = None
+        self.is_owner = False
         self.is_stopping = False
 
     # ------------------------------------------------------------------ start-up
     def start(self) -> None:
         running = read_runtime_info()
-        if running is not None:
+        if running is not None:  # not ours: stop() must leave it alone
             raise LaunchError(
                 f"a machine is already running for instance '{current_instance()}' "
                 f"(pid {running.pid}, {running.ini}): stop it first, or set "
                 f"{INSTANCE_ENV} to run another one"
             )
+        self.is_owner = True  # from here on this instance is ours to clean up
         leftovers = remove_instance_objects()
         if leftovers:
             say(f"removed {len(leftovers)} stale shared-memory objects of a previous run")
@@ -124,6 +128,7 @@ class Launcher:
             stdout=subprocess.PIPE,
             cwd=self.folder,
             process_group=0,  # Ctrl-C reaches the launcher, which stops things in order
+            preexec_fn=die_with_parent,
         )
         line = self.host.stdout.readline().decode(errors="replace").strip()
         if line != "rtapi_app: ready":
@@ -156,6 +161,7 @@ class Launcher:
 
             os.chdir(self.folder)  # HAL files name their files relative to the config
             self.hal_session = HalCmd(ini=self.ini)
+            self.hal_session.child_setup = die_with_parent  # loadusr'd programs (iocontrol)
         return self.hal_session
 
     def _start_task(self) -> None:
@@ -164,6 +170,7 @@ class Launcher:
             [sys.executable, "-m", "task", "-ini", self.ini_path],
             cwd=self.folder,
             process_group=0,
+            preexec_fn=die_with_parent,
         )
         status = self.nml[EMC_STATUS]
         deadline = time.monotonic() + READY_TIMEOUT_S
@@ -213,6 +220,8 @@ class Launcher:
     # ------------------------------------------------------------------ shut-down
     def stop(self) -> None:
         """Stop everything that was started, newest first; safe to call at any point."""
+        if not self.is_owner:
+            return  # refused before starting anything: another machine's things stay
         say("shutting down")
         _terminate(self.display, "display")
         _terminate(self.task, "task", timeout=10)
@@ -229,6 +238,13 @@ class Launcher:
         if leftovers:
             say(f"removed {len(leftovers)} shared-memory objects left by crashed processes")
         say("stopped")
+
+
+def die_with_parent() -> None:
+    """In a child before exec: SIGTERM when the launcher dies, even by kill -9, so a killed
+    launcher never leaves a machine running without its master (Linux PR_SET_PDEATHSIG)."""
+    libc = ctypes.CDLL(None, use_errno=True)
+    libc.prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
 
 
 def _master_process(config: NmlConfig) -> str:

@@ -199,6 +199,8 @@ class HalCmd:
         self.is_quit = False
         self.where = ""
         self.user_procs: dict[str, subprocess.Popen[bytes]] = {}
+        # run in each loadusr'd program before exec (the launcher ties them to its life)
+        self.child_setup: Callable[[], None] | None = None
         self.warned_names: set[str] = set()
         self.verbs: dict[str, Callable[[list[str]], None]] = {
             name[3:].replace("_", ""): getattr(self, name)
@@ -341,7 +343,7 @@ class HalCmd:
         comp_name = comp_name or Path(args[0]).stem
         args = [*USERSPACE_TOOLS.get(args[0], [args[0]]), *args[1:]]
         try:
-            proc = subprocess.Popen(args, stdin=subprocess.DEVNULL)
+            proc = subprocess.Popen(args, stdin=subprocess.DEVNULL, preexec_fn=self.child_setup)
         except OSError as exc:
             raise HalError(f"loadusr: cannot run '{args[0]}': {exc.strerror}") from None
         self.user_procs[comp_name] = proc

@@ -66,10 +66,23 @@ class Processes:
     def kill_all(self) -> None:
         for proc in self.started:
             if proc.poll() is None:
+                for pid in [*_descendants(proc.pid), proc.pid]:  # children in other groups too
+                    with contextlib.suppress(ProcessLookupError):
+                        os.kill(pid, signal.SIGKILL)
                 with contextlib.suppress(ProcessLookupError):
                     os.killpg(proc.pid, signal.SIGKILL)
             with contextlib.suppress(subprocess.TimeoutExpired, ValueError):
                 proc.communicate(timeout=5)
+
+
+def _descendants(pid: int) -> list[int]:
+    """Every process below ``pid``, deepest first (from /proc's children lists)."""
+    found: list[int] = []
+    for task in Path(f"/proc/{pid}/task").glob("*"):
+        with contextlib.suppress(OSError):
+            for child in map(int, (task / "children").read_text().split()):
+                found = [*_descendants(child), child, *found]
+    return found
 
 
 @pytest.fixture

@@ -21,7 +21,7 @@ import pytest
 
 import cnc
 from cnc.runtime import read_runtime_info
-from nml.ipcnames import instance_objects
+from nml.ipcnames import instance_objects, remove_instance_objects
 
 MACHINE = Path(__file__).with_name("machine")
 
@@ -225,8 +225,12 @@ def test_a_second_launch_of_the_same_instance_is_refused(machine: Machine, procs
     second = procs.python("-m", "cnc", "run", "--headless", "mill.ini", cwd=machine.folder)
     assert second.wait(timeout=30) == 1
     assert "a machine is already running" in second.stderr.read()
-    machine.stat.poll()  # the first one is untouched
+    machine.stat.poll()  # the first one is untouched, and keeps working
     assert machine.stat.task_state == cnc.STATE_ESTOP
+    machine.ready_to_move()
+    machine.command.mdi("G0 X1")
+    assert machine.command.wait_complete(10) == cnc.RCS_DONE
+    assert read_runtime_info().pid == machine.proc.pid
 
 
 def start_long_program(machine: Machine) -> None:
@@ -434,3 +438,20 @@ def test_the_machine_reappears_where_it_was_after_a_restart(procs, tmp_path: Pat
     finally:
         second.send_signal(signal.SIGTERM)
         second.wait(timeout=30)
+
+
+def test_a_killed_launcher_takes_its_machine_down_with_it(procs, tmp_path: Path) -> None:
+    folder = tmp_path / "machine"
+    shutil.copytree(MACHINE, folder)
+    launcher = procs.python("-m", "cnc", "run", "--headless", "mill.ini", cwd=folder)
+    Machine(launcher, folder).wait_ready()
+    pids = machine_pids(launcher, folder)
+    assert len(pids) >= 3  # realtime host, iocontrol, task
+    os.kill(launcher.pid, signal.SIGKILL)
+    launcher.wait(timeout=10)
+    deadline = time.monotonic() + 20
+    while any(Path(f"/proc/{pid}").exists() for pid in pids.values()):
+        assert time.monotonic() < deadline, f"still running: {list(pids)}"
+        time.sleep(0.05)
+    # what they left in shared memory is removed by the next launch (see the restart test)
+    remove_instance_objects()
