@@ -161,8 +161,20 @@ class Interpreter(
 ):
     """LinuxCNC's RS274NGC interpreter, talking to a canon."""
 
-    def __init__(self, canon, *, ini=None, parameter_file: str = "", task: int = 0) -> None:
+    def __init__(
+        self,
+        canon,
+        *,
+        ini=None,
+        parameter_file: str = "",
+        task: int = 0,
+        hal: Callable[[str], float | None] | None = None,
+    ) -> None:
+        """``ini`` is a cnc.ini.IniFile or None; ``parameter_file`` the .var file; ``task``
+        the value of #<_task>; ``hal`` looks up a HAL pin, signal or parameter by name for
+        #<_hal[...]> (None: there is no HAL, as in rs274)."""
         self.canon = canon
+        self.hal = hal
         canon.linetext = self._get_linetext
         self.ini = ini
         self.parameter_file = parameter_file

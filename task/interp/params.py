@@ -222,8 +222,14 @@ class ParamsMixin:
                         PA_GLOBAL | PA_READONLY | PA_FROM_INI,
                     ]
                     return True, value
-            # #<_hal[...]>: the standalone interpreter has no HAL, so the lookup fails
-            # quietly and the parameter counts as undefined, as in rs274
+            # #<_hal[pin, signal or parameter]>: a failed lookup leaves the parameter
+            # undefined (LinuxCNC drops the lookup's error); rs274 has no HAL at all
+            if self.hal is not None and self.feature_hal_pin_vars and lower.startswith("_hal["):
+                close = name.find("]", 5)
+                if len(name) > 6 and close >= 0 and close + 1 == len(name):
+                    value = self.hal(name[5:close])
+                    if value is not None:
+                        return True, float(value)
             return False, 0.0
         if entry[1] & PA_USE_LOOKUP:
             return True, self.lookup_named_param(name)

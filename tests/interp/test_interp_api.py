@@ -149,3 +149,17 @@ def test_parameter_file_out_of_order_is_an_error(tmp_path) -> None:
     )
     with pytest.raises(InterpError, match="Parameter file out of order"):
         interp.init()
+
+
+def test_hal_parameters_come_from_the_lookup(tmp_path) -> None:
+    (tmp_path / "prog.ngc").write_text("(DEBUG, #<_hal[motion.spindle-speed]> #<_hal[nope]>)\nM2\n")
+    out = io.StringIO()
+    interp = Interpreter(
+        PrintingCanon(out.write, ToolTable()),
+        parameter_file=str(tmp_path / "p.var"),
+        hal={"motion.spindle-speed": 1200.0}.get,
+    )
+    interp.init()
+    interp.open(str(tmp_path / "prog.ngc"))
+    run_all(interp)
+    assert 'MESSAGE(" 1200.000000 ######")' in out.getvalue()
