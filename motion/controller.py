@@ -301,11 +301,18 @@ class MotionController:
         problem = self._require_coord() or self._check_soft_limits(_pose(cmd.end), "Circular move")
         if problem:
             return problem
+        # LinuxCNC's turn: n >= 0 counter-clockwise about the normal plus n full turns;
+        # -1, -2 ... clockwise (one arc, plus -turn - 1 full turns): the other way round
+        normal = (cmd.normal.x, cmd.normal.y, cmd.normal.z)
+        turns = cmd.turn
+        if turns < 0:
+            normal = (-normal[0], -normal[1], -normal[2])
+            turns = -turns - 1
         self.tp.add_circle(
             list(_pose(cmd.end)),
             (cmd.center.x, cmd.center.y, cmd.center.z),
-            (cmd.normal.x, cmd.normal.y, cmd.normal.z),
-            cmd.turn,
+            normal,
+            turns,
             cmd.vel,
             cmd.ini_maxvel,
             cmd.acc,

@@ -268,3 +268,22 @@ def test_status_tells_which_kind_of_move_runs() -> None:
     run(motion, 3000)
     motion.fill_status(stat)
     assert stat.traj.motion_type == 0  # nothing left to do
+
+
+@pytest.mark.parametrize(("turn", "passes_y"), [(0, 10.0), (-1, -10.0)])
+def test_arc_direction_follows_linuxcncs_turn_convention(turn: int, passes_y: float) -> None:
+    """turn 0 is one counter-clockwise arc about the normal, -1 one clockwise arc (G2)."""
+    motion = enabled_homed()
+    motion.handle(move(10.0))
+    run(motion, 1000)
+    arc = emc.EMC_TRAJ_CIRCULAR_MOVE(turn=turn, vel=20.0, ini_maxvel=50.0, acc=500.0)
+    arc.end.tran.x = -10.0
+    arc.normal.z = 1.0  # the plane's normal, whichever the direction, as emccanon sends it
+    assert motion.handle(arc) is None
+    extreme = 0.0
+    while not motion.is_in_position:
+        run(motion, 1)
+        y = motion.carte_pos_cmd.y
+        extreme = y if abs(y) > abs(extreme) else extreme
+    assert extreme == pytest.approx(passes_y, abs=1e-3)  # sampled each period
+    assert motion.carte_pos_cmd.x == pytest.approx(-10.0)

@@ -143,6 +143,8 @@ def test_program_with_a_loop_and_a_tool_change_runs_to_the_end(machine: Machine)
         "  G1 X[10 * [#1 + 1]] F600\n"
         "  #1 = [#1 + 1]\n"
         "o100 endwhile\n"
+        "G2 X10 Y0 I-10 J0\n"
+        "G3 X30 Y0 I10 J0\n"
         "M8\n"
         "G0 Z8\n"
         "M9\n"
