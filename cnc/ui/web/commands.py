@@ -1,0 +1,441 @@
+"""The page's commands: {"cmd": NAME, ...arguments} -> ``cnc.command`` calls.
+
+``Commands.run(request)`` runs in a worker thread (it waits for the controller); each thread
+has its own ``cnc.command`` and ``cnc.stat``, so ``wait_complete`` of one command never
+waits for another browser's, and an abort is never queued behind a running MDI line.
+Like AXIS, a command switches the task mode it needs first (MDI for ``mdi``, MANUAL for
+jogs and homing, AUTO for programs). Bad arguments raise ``CommandError`` with the reason.
+"""
+
+from __future__ import annotations
+
+import shlex
+import subprocess
+import tempfile
+import threading
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import cnc
+from cnc.ui.formatting import parse_float
+from cnc.ui.web.settings import Settings
+
+TIMEOUT_S = 10.0  # how long a command may take before the page is told it still runs
+PROGRAM_TIMEOUT_S = 3600.0  # an MDI line may be a long move
+WAIT_SLICE_S = 0.5
+FILTER_TIMEOUT_S = 120.0  # a [FILTER] program converting an image may take a while
+
+
+class CommandError(Exception):
+    """A command that could not be sent, or that the controller refused; str() says why.
+    ``is_reported``: the controller refused it and said why on the error channel, which
+    every page shows already."""
+
+    def __init__(self, text: str, is_reported: bool = False) -> None:
+        super().__init__(text)
+        self.is_reported = is_reported
+
+
+Handler = Callable[["Commands", dict[str, Any]], str | None]
+HANDLERS: dict[str, Handler] = {}
+
+
+def handler(name: str) -> Callable[[Handler], Handler]:
+    def register(run: Handler) -> Handler:
+        HANDLERS[name] = run
+        return run
+
+    return register
+
+
+# ------------------------------------------------------------------ argument helpers
+def number(request: dict[str, Any], key: str, minimum: float | None = None) -> float:
+    """A number argument: a JSON number, or text with ',' or '.' as decimal separator
+    (GUI-003)."""
+    value = request.get(key)
+    if isinstance(value, bool) or value is None:
+        raise CommandError(f"'{key}' must be a number")
+    try:
+        result = float(value) if isinstance(value, int | float) else parse_float(str(value))
+    except ValueError as exc:
+        raise CommandError(f"'{key}': {exc}") from None
+    if minimum is not None and result < minimum:
+        raise CommandError(f"'{key}' must be at least {minimum:g}")
+    return result
+
+
+def whole(request: dict[str, Any], key: str, default: int | None = None) -> int:
+    value = request.get(key, default)
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise CommandError(f"'{key}' must be a whole number")
+    return value
+
+
+def switch(request: dict[str, Any], key: str = "on") -> bool:
+    value = request.get(key)
+    if not isinstance(value, bool):
+        raise CommandError(f"'{key}' must be true or false")
+    return value
+
+
+def text(request: dict[str, Any], key: str) -> str:
+    value = request.get(key)
+    if not isinstance(value, str) or not value.strip():
+        raise CommandError(f"'{key}' must be a non-empty text")
+    return value.strip()
+
+
+class Commands:
+    """Runs the page's commands against one controller (``source``: INI, NML or None)."""
+
+    def __init__(self, settings: Settings, source: str | None = None) -> None:
+        self.settings = settings
+        self.source = source
+        self._local = threading.local()
+        self.mdi_history: list[str] = _read_history(settings.mdi_history_file)
+        self._history_lock = threading.Lock()
+        self.is_stopping = threading.Event()  # set when the server shuts down
+
+    # ---------------------------------------------------------------- per-thread objects
+    @property
+    def command(self) -> cnc.command:
+        if getattr(self._local, "command", None) is None:
+            self._local.command = cnc.command(self.source)
+        return self._local.command
+
+    @property
+    def stat(self) -> cnc.stat:
+        if getattr(self._local, "stat", None) is None:
+            self._local.stat = cnc.stat(self.source)
+        self._local.stat.poll()
+        return self._local.stat
+
+    def forget(self) -> None:
+        """Drop this thread's objects (after the controller stopped or restarted)."""
+        self._local.command = self._local.stat = None
+
+    # ---------------------------------------------------------------- running
+    def run(self, request: dict[str, Any]) -> str:
+        """Run one request; its result text ("DONE" or what happened); CommandError."""
+        name = request.get("cmd")
+        run = HANDLERS.get(name) if isinstance(name, str) else None
+        if run is None:
+            raise CommandError(f"unknown command {name!r}")
+        try:
+            return run(self, request) or "DONE"
+        except CommandError as exc:
+            raise CommandError(f"{name}: {exc}", exc.is_reported) from None
+        except cnc.error as exc:  # the controller is not running, or restarted
+            self.forget()
+            raise CommandError(f"{name}: {exc}") from None
+        except (TypeError, ValueError, OverflowError) as exc:  # refused by the API
+            raise CommandError(f"{name}: {exc}") from None
+
+    def send(self, method: str, *args: Any, timeout: float = TIMEOUT_S) -> None:
+        """``cnc.command().<method>(*args)``, then wait until the controller finished it."""
+        commands = self.command
+        getattr(commands, method)(*args)
+        deadline = time.monotonic() + timeout
+        result = -1
+        # Waited in slices, so that a server that stops does not wait for a long move.
+        while result == -1 and not self.is_stopping.is_set():
+            left = deadline - time.monotonic()
+            if left <= 0:
+                break
+            result = commands.wait_complete(min(left, WAIT_SLICE_S))
+        if result == cnc.RCS_ERROR:
+            raise CommandError(f"the controller refused {method}", is_reported=True)
+        if result != cnc.RCS_DONE:
+            raise CommandError(f"{method} not finished after {timeout:g} s (it may still run)")
+
+    def ensure_mode(self, mode: int) -> None:
+        if self.stat.task_mode != mode:
+            self.send("mode", mode)
+
+    def joint_of(self, request: dict[str, Any]) -> int:
+        """The joint an "axis" letter (trivial kinematics: its place in COORDINATES) or a
+        "joint" number names."""
+        if "joint" in request:
+            return whole(request, "joint")
+        letter = str(request.get("axis", "")).upper()
+        if len(letter) != 1 or letter not in self.settings.axes:
+            raise CommandError(f"unknown axis {request.get('axis')!r}")
+        return self.settings.axes.index(letter)
+
+    def remember_mdi(self, line: str) -> list[str]:
+        """Add an MDI line to the history (and its file); the whole history."""
+        with self._history_lock:
+            if not self.mdi_history or self.mdi_history[-1] != line:
+                self.mdi_history.append(line)
+                path = self.settings.mdi_history_file
+                if path is not None:
+                    try:
+                        with open(path, "a", encoding="utf-8") as file:
+                            file.write(line + "\n")
+                    except OSError:
+                        pass  # a read-only history file must not fail the command
+            return list(self.mdi_history)
+
+    # ---------------------------------------------------------------- programs
+    def program_path(self, name: str) -> Path:
+        """A program file named relative to PROGRAM_PREFIX, never outside it."""
+        folder = self.settings.program_prefix
+        if folder is None:
+            raise CommandError("no [DISPLAY]PROGRAM_PREFIX")
+        path = (folder / name).resolve()
+        if not path.is_relative_to(folder.resolve()) or not path.is_file():
+            raise CommandError(f"no program {name!r}")
+        return path
+
+    def program_files(self) -> list[str]:
+        """Programs under PROGRAM_PREFIX with a [FILTER] extension, relative, sorted."""
+        folder = self.settings.program_prefix
+        if folder is None or not folder.is_dir():
+            return []
+        found = []
+        for path in folder.rglob("*"):
+            if path.is_file() and path.suffix.lower() in self.settings.extensions:
+                found.append(path.relative_to(folder).as_posix())
+        return sorted(found)
+
+
+def _read_history(path: Path | None) -> list[str]:
+    if path is None:
+        return []
+    try:
+        return [line for line in path.read_text(encoding="utf-8").splitlines() if line.strip()]
+    except OSError:
+        return []
+
+
+# ------------------------------------------------------------------ machine
+@handler("estop")
+def _estop(c: Commands, r: dict[str, Any]) -> None:
+    c.send("state", cnc.STATE_ESTOP if switch(r) else cnc.STATE_ESTOP_RESET)
+
+
+@handler("machine")
+def _machine(c: Commands, r: dict[str, Any]) -> None:
+    c.send("state", cnc.STATE_ON if switch(r) else cnc.STATE_OFF)
+
+
+@handler("mode")
+def _mode(c: Commands, r: dict[str, Any]) -> None:
+    modes = {"manual": cnc.MODE_MANUAL, "mdi": cnc.MODE_MDI, "auto": cnc.MODE_AUTO}
+    mode = modes.get(r.get("mode"))  # type: ignore[arg-type]
+    if mode is None:
+        raise CommandError("'mode' must be one of manual, mdi, auto")
+    c.send("mode", mode)
+
+
+@handler("home")
+def _home(c: Commands, r: dict[str, Any]) -> None:
+    joint = whole(r, "joint", -1)
+    c.ensure_mode(cnc.MODE_MANUAL)
+    c.send("home", joint)
+
+
+@handler("unhome")
+def _unhome(c: Commands, r: dict[str, Any]) -> None:
+    joint = whole(r, "joint", -1)
+    c.ensure_mode(cnc.MODE_MANUAL)
+    c.send("unhome", joint)
+
+
+@handler("override_limits")
+def _override_limits(c: Commands, r: dict[str, Any]) -> None:
+    c.ensure_mode(cnc.MODE_MANUAL)
+    c.send("override_limits")
+
+
+@handler("jog")
+def _jog(c: Commands, r: dict[str, Any]) -> None:
+    """{"action": "start"|"stop"|"increment", "axis": "X" (or "joint": 0), "direction":
+    1|-1, "speed": units per minute, "distance": machine units}. Motion jogs joints."""
+    action = r.get("action")
+    joint = c.joint_of(r)
+    if action == "stop":
+        c.send("jog", cnc.JOG_STOP, 1, joint)
+        return
+    direction = number(r, "direction")
+    speed = number(r, "speed", minimum=0.0) / 60.0  # the API takes units per second
+    velocity = speed if direction >= 0 else -speed
+    c.ensure_mode(cnc.MODE_MANUAL)
+    if action == "start":
+        c.send("jog", cnc.JOG_CONTINUOUS, 1, joint, velocity)
+    elif action == "increment":
+        c.send("jog", cnc.JOG_INCREMENT, 1, joint, velocity, number(r, "distance", 0.0))
+    else:
+        raise CommandError("'action' must be one of start, stop, increment")
+
+
+@handler("touch_off")
+def _touch_off(c: Commands, r: dict[str, Any]) -> None:
+    """Set the current work offset so that the axis reads "value" (G10 L20 P0)."""
+    letter = str(r.get("axis", "")).upper()
+    if len(letter) != 1 or letter not in c.settings.axes:
+        raise CommandError(f"unknown axis {r.get('axis')!r}")
+    value = number(r, "value")
+    c.ensure_mode(cnc.MODE_MDI)
+    c.send("mdi", f"G10 L20 P0 {letter}{value:.6f}")
+
+
+@handler("tool_set")
+def _tool_set(c: Commands, r: dict[str, Any]) -> None:
+    """Set a tool's Z offset and diameter in the tool table (G10 L1: iocontrol saves it)."""
+    tool = whole(r, "tool")
+    if tool <= 0:
+        raise CommandError("'tool' must be at least 1")
+    z, diameter = number(r, "z"), number(r, "diameter", 0.0)
+    c.ensure_mode(cnc.MODE_MDI)
+    c.send("mdi", f"G10 L1 P{tool} Z{z:.6f} R{diameter / 2:.6f}")
+
+
+# ------------------------------------------------------------------ MDI
+@handler("mdi")
+def _mdi(c: Commands, r: dict[str, Any]) -> str:
+    line = text(r, "text")
+    c.ensure_mode(cnc.MODE_MDI)
+    c.remember_mdi(line)
+    c.send("mdi", line, timeout=PROGRAM_TIMEOUT_S)
+    return "DONE"
+
+
+@handler("macro")
+def _macro(c: Commands, r: dict[str, Any]) -> None:
+    """An [MDI_COMMAND_LIST] button: its ';'-separated lines, each to its end (GUI-014)."""
+    index = whole(r, "index")
+    if not 0 <= index < len(c.settings.macros):
+        raise CommandError(f"no macro {index}")
+    c.ensure_mode(cnc.MODE_MDI)
+    for line in c.settings.macros[index]["commands"].split(";"):
+        if line.strip():
+            c.send("mdi", line.strip(), timeout=PROGRAM_TIMEOUT_S)
+
+
+# ------------------------------------------------------------------ programs
+@handler("open")
+def _open(c: Commands, r: dict[str, Any]) -> None:
+    path = c.program_path(text(r, "file"))
+    program = c.settings.filters.get(path.suffix.lower())
+    if program is not None:
+        path = run_filter(program, path)
+    c.ensure_mode(cnc.MODE_AUTO)
+    c.send("program_open", str(path))
+
+
+def run_filter(program: str, path: Path) -> Path:
+    """Run a [FILTER] program on ``path`` (GUI-015); its output, the G-code task opens, is
+    saved as <temp>/cnc-web-filtered/<name>.ngc."""
+    folder = Path(tempfile.gettempdir()) / "cnc-web-filtered"
+    folder.mkdir(exist_ok=True)
+    target = folder / f"{path.stem}.ngc"
+    try:
+        with open(target, "wb") as output:
+            done = subprocess.run(
+                [*shlex.split(program), str(path)],
+                stdout=output,
+                stderr=subprocess.PIPE,
+                timeout=FILTER_TIMEOUT_S,
+                check=False,
+            )
+    except (OSError, subprocess.TimeoutExpired) as exc:
+        raise CommandError(f"filter {program!r}: {exc}") from None
+    if done.returncode != 0:
+        reason = done.stderr.decode("utf-8", errors="replace").strip().splitlines()
+        raise CommandError(
+            f"filter {program!r} failed ({done.returncode}): {reason[-1] if reason else ''}"
+        )
+    return target
+
+
+@handler("run")
+def _run(c: Commands, r: dict[str, Any]) -> None:
+    line = whole(r, "line", 0)
+    c.ensure_mode(cnc.MODE_AUTO)
+    c.send("auto", cnc.AUTO_RUN, line)
+
+
+@handler("pause")
+def _pause(c: Commands, r: dict[str, Any]) -> None:
+    c.send("auto", cnc.AUTO_PAUSE)
+
+
+@handler("resume")
+def _resume(c: Commands, r: dict[str, Any]) -> None:
+    c.send("auto", cnc.AUTO_RESUME)
+
+
+@handler("step")
+def _step(c: Commands, r: dict[str, Any]) -> None:
+    c.ensure_mode(cnc.MODE_AUTO)
+    c.send("auto", cnc.AUTO_STEP)
+
+
+@handler("abort")
+def _abort(c: Commands, r: dict[str, Any]) -> None:
+    c.send("abort")
+
+
+@handler("optional_stop")
+def _optional_stop(c: Commands, r: dict[str, Any]) -> None:
+    c.send("set_optional_stop", int(switch(r)))
+
+
+@handler("block_delete")
+def _block_delete(c: Commands, r: dict[str, Any]) -> None:
+    c.send("set_block_delete", int(switch(r)))
+
+
+# ------------------------------------------------------------------ overrides, spindle, coolant
+def _percent(c: Commands, r: dict[str, Any], low: float, high: float) -> float:
+    """The "percent" argument clamped to the INI's limits, as a scale (1.0 = 100 %)."""
+    return min(max(number(r, "percent"), low), high) / 100.0
+
+
+@handler("feedrate")
+def _feedrate(c: Commands, r: dict[str, Any]) -> None:
+    c.send("feedrate", _percent(c, r, 0.0, c.settings.max_feed_override))
+
+
+@handler("rapidrate")
+def _rapidrate(c: Commands, r: dict[str, Any]) -> None:
+    c.send("rapidrate", _percent(c, r, 0.0, c.settings.max_rapid_override))
+
+
+@handler("spindle_override")
+def _spindle_override(c: Commands, r: dict[str, Any]) -> None:
+    low, high = c.settings.min_spindle_override, c.settings.max_spindle_override
+    c.send("spindleoverride", _percent(c, r, low, high))
+
+
+@handler("spindle")
+def _spindle(c: Commands, r: dict[str, Any]) -> None:
+    """{"action": "forward"|"reverse"|"stop"|"faster"|"slower", "speed": rpm (optional)}."""
+    action = r.get("action")
+    if action == "stop":
+        c.send("spindle", cnc.SPINDLE_OFF)
+        return
+    if action in ("faster", "slower"):
+        c.send("spindle", cnc.SPINDLE_INCREASE if action == "faster" else cnc.SPINDLE_DECREASE)
+        return
+    directions = {"forward": cnc.SPINDLE_FORWARD, "reverse": cnc.SPINDLE_REVERSE}
+    if action not in directions:
+        raise CommandError("'action' must be one of forward, reverse, stop, faster, slower")
+    limits = c.settings.spindle
+    speed = number(r, "speed", 0.0) if "speed" in r else limits["default"]
+    speed = min(max(speed, limits["min"]), limits["max"])  # the INI's manual range (GUI-013)
+    c.ensure_mode(cnc.MODE_MANUAL)
+    c.send("spindle", directions[action], speed)
+
+
+@handler("flood")
+def _flood(c: Commands, r: dict[str, Any]) -> None:
+    c.send("flood", cnc.FLOOD_ON if switch(r) else cnc.FLOOD_OFF)
+
+
+@handler("mist")
+def _mist(c: Commands, r: dict[str, Any]) -> None:
+    c.send("mist", cnc.MIST_ON if switch(r) else cnc.MIST_OFF)
