@@ -313,6 +313,11 @@ class Struct:
     def to_bytes(self) -> bytes:
         return self._arr.tobytes()
 
+    def byte_view(self) -> memoryview:
+        """The message's fixed-layout bytes, writable in place (for copying a status in
+        without allocating: ``ShmBuffer.peek_into``)."""
+        return memoryview(self._arr.reshape(1).view(np.uint8))
+
     @classmethod
     def from_bytes(cls, data: bytes | bytearray | memoryview) -> Struct:
         """Decode the fixed layout; a writable copy, so the caller may keep and change it."""

@@ -39,7 +39,7 @@ from dataclasses import dataclass
 
 import posix_ipc
 
-from nml.codec import Encoding, decode, encode
+from nml.codec import HEADER, Encoding, decode, encode
 from nml.config import BufferConfig, ProcessConfig, describe_timeout
 from nml.errors import NmlAccessError, NmlFormatError, NmlTimeoutError
 from nml.ipcnames import ipc_name
@@ -616,6 +616,50 @@ class ShmBuffer:
             return self._queue_take(is_consuming=False)
         data, _ = self._latest_bytes()
         return None if data is None else decode(data, f"buffer {self.name}")
+
+    def peek_into(self, msg: NMLmsg, target: memoryview | None = None) -> bool:
+        """Copy the current status into ``msg`` in place, as LinuxCNC's stat.poll() copies
+        into its struct: no allocation. ``target`` is ``msg.byte_view()``, cached by a
+        caller that polls often. False if nothing was published yet; the header is checked
+        as ``decode`` checks it."""
+        self._require_readable()
+        if self.is_queue or self.encoding is not Encoding.FIXED:
+            found = self.peek()
+            if found is None:
+                return False
+            if type(found) is not type(msg):
+                raise NmlFormatError(f"buffer {self.name}: holds {found.NAME}, not {msg.NAME}")
+            msg._arr[...] = found._arr
+            return True
+        target = msg.byte_view() if target is None else target
+        mm, view = self._mm, self._view
+        seq_at, start = _HEADER_FIELDS["seq"][0], self.layout.data_offset
+        expected = (msg.TYPE, msg.dtype.itemsize, msg.layout_crc, Encoding.FIXED)
+        length_needed = HEADER.size + msg.dtype.itemsize
+        spins = 0
+        while True:
+            seq, _, length = _LATEST_STATE.unpack_from(mm, seq_at)  # type: ignore[arg-type]
+            if not seq & 1:
+                header = HEADER.unpack_from(mm, start) if length else None  # type: ignore[arg-type]
+                if header == expected and length == length_needed:
+                    target[:] = view[start + HEADER.size : start + length_needed]  # type: ignore[index]
+                if _U64.unpack_from(mm, seq_at)[0] == seq:  # type: ignore[arg-type]
+                    if not length:
+                        return False
+                    if header != expected or length != length_needed:
+                        decode(
+                            bytes(view[start : start + min(length, self.layout.capacity)]),  # type: ignore[index]
+                            f"buffer {self.name}",
+                        )  # raises the precise error
+                        raise NmlFormatError(
+                            f"buffer {self.name}: holds a {header[0]} message, not {msg.NAME}"
+                        )
+                    return True
+            spins += 1
+            if spins > 100:
+                time.sleep(0.0001)
+                if spins % 1000 == 0 and self._repair_after_dead_holder():
+                    continue
 
     def blocking_read(self, timeout: float) -> NMLmsg | None:
         """Wait for a new message up to ``timeout`` s (< 0: forever, 0: don't wait). The whole

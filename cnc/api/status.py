@@ -269,25 +269,25 @@ class stat:  # LinuxCNC's name: linuxcnc.stat
     ``cnc.api.connection``). Before the first ``poll()`` every attribute is zero or empty.
     """
 
-    __slots__ = ("__dict__", "__weakref__", "_link", "_status", "_tool_data")
+    __slots__ = ("__dict__", "__weakref__", "_link", "_status", "_status_bytes", "_tool_data")
 
     def __init__(self, source: str | os.PathLike[str] | None = None) -> None:
         self._link = Link(source)
         self._link.close_with(self)
         self._status = EMC_STAT()
+        self._status_bytes = self._status.byte_view()  # poll() copies into it in place
         self._tool_data = _ToolData()
         self._link.try_attach(EMC_STATUS)
 
     def poll(self) -> None:
         """Take the latest status; ``cnc.error`` if the controller is not running."""
         try:
-            latest = self._link.buffer(EMC_STATUS).peek()
+            buffer = self._link.buffer(EMC_STATUS)
+            has_status = buffer.peek_into(self._status, self._status_bytes)
         except NmlError as exc:
             raise error(str(exc)) from None
-        if latest is None:  # buffers made, task not publishing yet: not up (like LinuxCNC)
+        if not has_status:  # buffers made, task not publishing yet: not up (like LinuxCNC)
             raise error("the controller is starting: no status published yet")
-        if type(latest) is EMC_STAT:
-            self._status = latest
         self.__dict__.clear()  # attributes are computed again from the new status
 
     def __getattr__(self, name: str) -> Any:

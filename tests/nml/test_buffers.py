@@ -278,3 +278,27 @@ def test_a_signal_during_a_blocking_read_ends_the_wait_cleanly(opened) -> None:
         assert received == [1]
     finally:
         signal.signal(signal.SIGUSR1, previous)
+
+
+@pytest.mark.parametrize("buffer", ["s", "sm"])
+def test_peek_into_copies_the_status_in_place(opened, buffer: str) -> None:
+    master, reader = opened("m", buffer), opened("r", buffer)
+    target = TEST_STAT()
+    view = target.byte_view()
+    assert reader.peek_into(target, view if buffer == "s" else None) is False  # nothing yet
+    status = TEST_STAT(counter=4)
+    status.values[7] = 2.5
+    master.write(status)
+    assert reader.peek_into(target, view if buffer == "s" else None) is True
+    assert (target.counter, target.values[7]) == (4, 2.5)
+
+
+def test_peek_into_checks_what_it_copies(opened) -> None:
+    master, reader = opened("m", "s"), opened("r", "s")
+    master.write(TEST_STAT(counter=1))
+    with pytest.raises(NmlFormatError, match="holds a 90002 message, not TEST_CMD"):
+        reader.peek_into(TEST_CMD())
+    start = master.layout.data_offset
+    master._mm[start : start + 4] = b"\x99\x99\x00\x00"
+    with pytest.raises(NmlFormatError, match="unknown message type 39321"):
+        reader.peek_into(TEST_STAT())
