@@ -156,6 +156,7 @@ class ReaderMixin:
             counter = self.read_n_number(line, counter, block)
         m_number = -1
         if counter < length and line[counter] == "m":
+            self._o_slots[0] = 0.0  # this number read overwrites LinuxCNC's stale slot
             try:
                 m_number, _ = self.read_integer_value(line, counter + 1)
             except InterpError:
