@@ -603,6 +603,7 @@ class Interpreter(
         return INTERP_OK
 
     def reset(self) -> int:
+        self._fast = None
         self.call_state = 0
         self.linetext = ""
         self.blocktext = ""
@@ -625,6 +626,7 @@ class Interpreter(
             raise
 
     def _read(self, command: str | None) -> int:
+        self._fast = None  # a line read but never executed is dropped
         lines = self.file_lines
         if (
             command is None

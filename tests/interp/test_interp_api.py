@@ -163,3 +163,10 @@ def test_hal_parameters_come_from_the_lookup(tmp_path) -> None:
     interp.open(str(tmp_path / "prog.ngc"))
     run_all(interp)
     assert 'MESSAGE(" 1200.000000 ######")' in out.getvalue()
+
+
+def test_an_unexecuted_line_does_not_leak_into_the_next_command(tmp_path) -> None:
+    interp, out = make(tmp_path, "G0 X5\nM2\n")
+    assert interp.read() == INTERP_OK  # read, then abandoned (an abort, say)
+    assert interp.execute("G0 Y7") == INTERP_OK
+    assert calls(out)[-1].startswith("STRAIGHT_TRAVERSE(0.0000, 7.0000")
