@@ -35,12 +35,14 @@ def _is_catalogue(cls: type[NMLmsg]) -> bool:
     return cls.__module__.startswith("nml.")
 
 
-def _is_io_type(type_id: int) -> bool:
-    return 1100 <= type_id < 1700
-
-
-def _is_motion_type(type_id: int) -> bool:
+def is_motion_type(type_id: int) -> bool:
+    """Commands motion carries out: JOINT, JOG, TRAJ, MOTION (1xx..3xx) and SPINDLE (13xx)."""
     return 100 <= type_id < 400 or 1300 <= type_id < 1400
+
+
+def is_io_type(type_id: int) -> bool:
+    """Commands iocontrol carries out: TOOL, AUX, COOLANT, LUBE, IO (11xx..16xx but 13xx)."""
+    return 1100 <= type_id < 1700 and not is_motion_type(type_id)
 
 
 def messages_of(buffer_name: str) -> list[type[NMLmsg]]:
@@ -53,9 +55,9 @@ def messages_of(buffer_name: str) -> list[type[NMLmsg]]:
         EMC_COMMAND: commands,
         EMC_STATUS: [c for c in (by_name("EMC_STAT"),) if c],
         EMC_ERROR: [c for c in REGISTRY.of_kind(MessageKind.OPERATOR) if _is_catalogue(c)],
-        TOOL_COMMAND: [c for c in commands if _is_io_type(c.TYPE)],
+        TOOL_COMMAND: [c for c in commands if is_io_type(c.TYPE)],
         TOOL_STATUS: [c for c in (by_name("EMC_IO_STAT"),) if c],
-        MOTION_COMMAND: [c for c in commands if _is_motion_type(c.TYPE)],
+        MOTION_COMMAND: [c for c in commands if is_motion_type(c.TYPE)],
         MOTION_STATUS: [c for c in (by_name("EMC_MOTION_STAT"),) if c],
     }
     return table.get(buffer_name, [])

@@ -36,6 +36,8 @@ from nml.channels import (
     TOOL_COMMAND,
     TOOL_STATUS,
     Nml,
+    is_io_type,
+    is_motion_type,
 )
 from nml.errors import NmlError
 from nml.message import RCS_STATUS, MessageKind
@@ -64,14 +66,6 @@ class Run(enum.Enum):
     IDLE = 0
     MDI = 1
     PROGRAM = 2
-
-
-def _is_motion_message(msg: emc.NMLmsg) -> bool:
-    return 100 <= msg.TYPE < 400 or 1300 <= msg.TYPE < 1400
-
-
-def _is_io_message(msg: emc.NMLmsg) -> bool:
-    return 1100 <= msg.TYPE < 1700 and not 1300 <= msg.TYPE < 1400
 
 
 class Task:
@@ -217,13 +211,13 @@ class Task:
 
     def _forward(self, cmd: emc.NMLmsg) -> str | None:
         """Manual commands: motion's and iocontrol's own, sent on when allowed."""
-        if _is_motion_message(cmd):
+        if is_motion_type(cmd.TYPE):
             if isinstance(cmd, emc.EMC_JOG_CMD_MSG | emc.EMC_JOINT_HOME | emc.EMC_JOINT_UNHOME):
                 problem = self._require(state=STATE.ON, mode=MODE.MANUAL)
                 if problem:
                     return problem
             return self._send_motion(cmd, is_waiting=True)
-        if _is_io_message(cmd):
+        if is_io_type(cmd.TYPE):
             return self._send_io(cmd, is_waiting=True)
         return f"task does not handle {cmd.NAME}"
 
@@ -539,12 +533,12 @@ class Task:
                     return
             elif msg.KIND is MessageKind.OPERATOR:
                 self._write_error_channel(msg)
-            elif _is_motion_message(msg):
+            elif is_motion_type(msg.TYPE):
                 if self.stat.motion.traj.queueFull:
                     return
                 if self._send_motion(msg):
                     return
-            elif _is_io_message(msg):
+            elif is_io_type(msg.TYPE):
                 if not self._is_everything_done():
                     return
                 if self._send_io(msg):
