@@ -105,10 +105,9 @@ def _libc_hypot():
     """glibc's hypot: CPython's math.hypot uses its own algorithm, which can differ from
     glibc in the last bit, and LinuxCNC's positions are built from glibc's."""
     import ctypes
-    import ctypes.util
 
     try:
-        libm = ctypes.CDLL(ctypes.util.find_library("m") or "libm.so.6")
+        libm = ctypes.CDLL("libm.so.6")  # find_library() would run ldconfig: slow
         func = libm.hypot
     except (OSError, AttributeError):
         import math
