@@ -244,8 +244,13 @@ class Canon(Protocol):
     def find_tool_index(self, toolno: int) -> int: ...
 
 
+_N_START = frozenset("\t /nN")
+
+
 def _nline(text: str) -> str:
     """The N column: ``N`` + the block's N digits padded to 6, or ``N.....``."""
+    if text[:1] not in _N_START:
+        return "N..... "
     k = 0
     n = len(text)
     while k < n and k < 256 and text[k] in "\t /":

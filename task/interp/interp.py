@@ -636,13 +636,8 @@ class Interpreter(
         ):
             # the common case first: a plain motion line from the file (see _fast_read)
             raw = lines[self.file_pos]
-            if (
-                raw[:1] in _FAST_FIRST
-                and len(raw) < LINELEN - 1
-                and "(" not in raw
-                and ";" not in raw
-                and "\x00" not in raw
-            ):
+            # (a comment, a NUL or anything unusual makes _FAST_LINE fail: general path)
+            if raw[:1] in _FAST_FIRST and len(raw) < LINELEN - 1:
                 text = raw.rstrip(" \t\n\r\f\v")
                 line = text.translate(_DOWNCASE)
                 match = _FAST_LINE.match(line)
@@ -657,7 +652,7 @@ class Interpreter(
                     self.linetext = text
                     self.blocktext = line
                     self.line_length = len(line)
-                    self.parameter_assignments = []
+                    self.parameter_assignments = ()
                     return INTERP_OK
         self.read_inputs()
         if command is None and self.file_lines is None:
