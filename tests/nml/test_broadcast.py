@@ -8,7 +8,6 @@ cursor, and a message is dropped once every live reader has read it.
 from __future__ import annotations
 
 import json
-from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -31,21 +30,6 @@ P w  q LOCAL localhost W  0 0.2 0 2
 @pytest.fixture
 def cfg() -> NmlConfig:
     return parse(NML, "test.nml")
-
-
-@pytest.fixture
-def opened(cfg: NmlConfig) -> Iterator:
-    buffers: list[ShmBuffer] = []
-
-    def open_buffer(process: str) -> ShmBuffer:
-        buf = ShmBuffer(cfg.buffers["q"], cfg.process(process, "q"))
-        buffers.append(buf)
-        return buf
-
-    yield open_buffer
-    for buf in reversed(buffers):
-        if buf._mm is not None:
-            buf.close()
 
 
 def indexes(reader: ShmBuffer) -> list[int]:

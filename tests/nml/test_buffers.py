@@ -5,7 +5,6 @@ from __future__ import annotations
 import dataclasses
 import threading
 import time
-from collections.abc import Iterator
 
 import pytest
 
@@ -36,20 +35,6 @@ P late q LOCAL localhost R 0 0.3 0 3
 @pytest.fixture
 def cfg() -> NmlConfig:
     return parse(NML, "test.nml")
-
-
-@pytest.fixture
-def opened(cfg: NmlConfig) -> Iterator:
-    buffers: list[ShmBuffer] = []
-
-    def open_buffer(process: str, buffer: str) -> ShmBuffer:
-        buf = ShmBuffer(cfg.buffers[buffer], cfg.process(process, buffer))
-        buffers.append(buf)
-        return buf
-
-    yield open_buffer
-    for buf in reversed(buffers):
-        buf.close()
 
 
 def test_queue_is_fifo_and_each_message_is_read_once(opened) -> None:
