@@ -270,8 +270,16 @@ def _nline(text: str) -> str:
 class PrintingCanon:
     """Prints canonical calls in rs274's format and keeps saicanon's world model."""
 
-    def __init__(self, write: Callable[[str], object], tools: ToolTable | None = None) -> None:
+    def __init__(
+        self,
+        write: Callable[[str], object],
+        tools: ToolTable | None = None,
+        flush: Callable[[], object] = lambda: None,
+    ) -> None:
+        """``write`` takes each output line; ``flush`` is called every 4096 calls, so
+        that a program that never ends (rs274 runs them forever too) does not pile up."""
         self.write = write
+        self.flush = flush
         self.counter = 1
         self.linetext: Callable[[], str] = lambda: ""
         self._last_text: str | None = None
@@ -311,6 +319,8 @@ class PrintingCanon:
             self._last_prefix = _nline(line)
         self.write(f"{self.counter:5d} {self._last_prefix}{text}\n")
         self.counter += 1
+        if not self.counter & 4095:
+            self.flush()
 
     # ---------------------------------------------------------- representation
     def SET_XY_ROTATION(self, t: float) -> None:
@@ -367,6 +377,8 @@ class PrintingCanon:
             f"{z:.4f}, {a:.4f}, {b:.4f}, {c:.4f})\n"
         )
         self.counter += 1
+        if not self.counter & 4095:
+            self.flush()
         self.position = [x, y, z, a, b, c]
 
     def STRAIGHT_FEED(self, line, x, y, z, a, b, c, u=0.0, v=0.0, w=0.0) -> None:
@@ -379,6 +391,8 @@ class PrintingCanon:
             f"{z:.4f}, {a:.4f}, {b:.4f}, {c:.4f})\n"
         )
         self.counter += 1
+        if not self.counter & 4095:
+            self.flush()
         self.position = [x, y, z, a, b, c]
 
     def ARC_FEED(

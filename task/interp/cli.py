@@ -9,7 +9,9 @@ Without ``-g`` rs274's interactive menu is offered; without FILE lines are read 
 
 from __future__ import annotations
 
+import contextlib
 import getopt
+import os
 import sys
 
 from iocontrol.tooltable import ToolTable
@@ -112,10 +114,7 @@ def interpret_from_keyboard(interp: Interpreter, out: _Out, block_delete: bool) 
 def interpret_from_file(interp: Interpreter, out: _Out, do_next: int, block_delete: bool) -> int:
     interp.canon.SET_BLOCK_DELETE(block_delete)
     status = 0
-    parts = out.parts
     while True:
-        if len(parts) >= 4096:
-            out.flush()
         try:
             read_status = interp.read()
         except InterpError as error:
@@ -204,9 +203,17 @@ def main(argv: list[str]) -> int:
         stdout = out_file
     out = _Out(stdout)
     try:
-        return _run(args, out, tool_files, var_file, block_delete, do_next, go, ini_path, task)
-    finally:
+        status = _run(args, out, tool_files, var_file, block_delete, do_next, go, ini_path, task)
         out.flush()
+        return status
+    except BrokenPipeError:
+        # the reader went away (rs274 dies of SIGPIPE): stop quietly
+        out.parts.clear()
+        with contextlib.suppress(OSError):
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, sys.stdout.fileno())
+        return 1
+    finally:
         if out_file is not None:
             out_file.close()
 
@@ -230,7 +237,7 @@ def _run(args, out, tool_files, var_file, block_delete, do_next, go, ini_path, t
             ini = IniFile.load(ini_path)
         except IniError:
             _err(out, f"Unable to open inifile:{ini_path}:\n")
-    canon = PrintingCanon(out.append, tools)
+    canon = PrintingCanon(out.append, tools, out.flush)
     interp = Interpreter(canon, parameter_file=var_file, task=task)
     # rs274 builds its interpreter before it names the INI file, so the predefined
     # #<_metric_machine> never sees it (-1); the INI counts from init() on.
