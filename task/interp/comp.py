@@ -411,7 +411,7 @@ class CompMixin:
                 comp_side=side,
                 tool_radius=tool_radius,
             )
-        self._inverse_time_arc(cx, cy, cz, center_x, center_y, turn, end_x, end_y, end_z, block)
+        self.inverse_time_rate_arc(cx, cy, cz, center_x, center_y, turn, end_x, end_y, end_z, block)
         if _inside(side, turn):
             gamma = math.atan2(center_y - end_y, center_x - end_x)
         else:
@@ -479,7 +479,9 @@ class CompMixin:
                 spiral_abs,
                 SPIRAL_RELATIVE_TOLERANCE,
             )
-        self._inverse_time_arc(opx, opy, opz, centerx, centery, turn, end_x, end_y, end_z, block)
+        self.inverse_time_rate_arc(
+            opx, opy, opz, centerx, centery, turn, end_x, end_y, end_z, block
+        )
         side = self.cutter_comp_side
         tool_radius = self.cutter_comp_radius
         arc_radius = ldmath.hypot(centerx - end_x, centery - end_y)
@@ -609,16 +611,6 @@ class CompMixin:
         self.comp_set_programmed(end_x, end_y, end_z)
         self.comp_set_current(new_end_x, new_end_y, end_z)
         self.current[3:9] = rest
-
-    def _inverse_time_arc(self, x1, y1, z1, cx, cy, turn, x2, y2, z2, block: Block) -> None:
-        if self.feed_mode != 1:
-            return
-        radius = ldmath.hypot(cx - x1, cy - y1)
-        theta = ldmath.find_turn(x1, y1, cx, cy, turn, x2, y2)
-        length = radius * abs(theta) if z2 == z1 else ldmath.hypot(radius * theta, z2 - z1)
-        rate = max(0.1, length * block.f_number)
-        self._enq("SET_FEED_RATE", rate)
-        self.feed_rate = rate
 
 
 def _inside_move(side: int, move: int) -> bool:

@@ -533,6 +533,17 @@ class MotionMixin:
             points.clear()
             self.motion_mode = -1
 
+    def inverse_time_rate_arc(self, x1, y1, z1, cx, cy, turn, x2, y2, z2, block: Block) -> None:
+        """G93: the feed rate that makes the arc take 1/F minutes."""
+        if self.feed_mode != INVERSE_TIME:
+            return
+        radius = ldmath.hypot(cx - x1, cy - y1)
+        theta = ldmath.find_turn(x1, y1, cx, cy, turn, x2, y2)
+        length = radius * abs(theta) if z2 == z1 else ldmath.hypot(radius * theta, z2 - z1)
+        rate = max(0.1, length * block.f_number)
+        self._enq("SET_FEED_RATE", rate)
+        self.feed_rate = rate
+
     def inverse_time_rate_straight(self, ends: list[float], block: Block) -> None:
         cur = list(self.current)
         if (
@@ -668,13 +679,9 @@ class MotionMixin:
                 spiral_abs,
                 SPIRAL_RELATIVE_TOLERANCE,
             )
-        if self.feed_mode == INVERSE_TIME:
-            length = _arc_length(
-                current1, current2, current3, center1, center2, turn, end1, end2, end3
-            )
-            rate = max(0.1, length * block.f_number)
-            self._enq("SET_FEED_RATE", rate)
-            self.feed_rate = rate
+        self.inverse_time_rate_arc(
+            current1, current2, current3, center1, center2, turn, end1, end2, end3, block
+        )
         self.canon.ARC_FEED(
             block.line_number,
             end1,
@@ -1006,25 +1013,3 @@ def _straight_length(end: list[float], start: list[float]) -> float:
             (end[6] - start[6]) ** 2 + (end[7] - start[7]) ** 2 + (end[8] - start[8]) ** 2
         )
     return math.sqrt((end[3] - start[3]) ** 2 + (end[4] - start[4]) ** 2 + (end[5] - start[5]) ** 2)
-
-
-def _find_turn(x1, y1, center_x, center_y, turn, x2, y2) -> float:
-    if turn == 0:
-        return 0.0
-    alpha = math.atan2(y1 - center_y, x1 - center_x)
-    beta = math.atan2(y2 - center_y, x2 - center_x)
-    if turn > 0:
-        if beta <= alpha:
-            beta += 2 * math.pi
-        return (beta - alpha) + (turn - 1) * (2 * math.pi)
-    if alpha <= beta:
-        alpha += 2 * math.pi
-    return (beta - alpha) + (turn + 1) * (2 * math.pi)
-
-
-def _arc_length(x1, y1, z1, cx, cy, turn, x2, y2, z2) -> float:
-    radius = ldmath.hypot(cx - x1, cy - y1)
-    theta = _find_turn(x1, y1, cx, cy, turn, x2, y2)
-    if z2 == z1:
-        return radius * abs(theta)
-    return ldmath.hypot(radius * theta, z2 - z1)
