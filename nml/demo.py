@@ -33,11 +33,11 @@ def motion_child(moves: int) -> int:
                 return 1
             stat.command_type, stat.echo_serial_number = cmd.TYPE, cmd.serial_number
             stat.status = RCS_STATUS.EXEC
-            status.write(stat)
+            status.write(stat, timeout=1.0)  # motion's P lines never wait; the demo may
             if isinstance(cmd, emc.EMC_TRAJ_LINEAR_MOVE):
                 stat.traj.position = cmd.end
             stat.status = RCS_STATUS.DONE
-            status.write(stat)
+            status.write(stat, timeout=1.0)
     return 0
 
 
@@ -50,7 +50,7 @@ def task_child(moves: int) -> int:
             move = emc.EMC_TRAJ_LINEAR_MOVE(type=emc.EMC_MOTION_TYPE.FEED, vel=10.0)
             move.end.tran.x = float(index)
             start = time.perf_counter()
-            serial = commands.write(move)
+            serial = commands.write(move, timeout=1.0)
             while True:
                 stat = status.blocking_read(5)
                 if stat is None:

@@ -501,12 +501,14 @@ class ShmBuffer:
                 return is_ready()
 
     # ------------------------------------------------------------------ write
-    def write(self, msg: NMLmsg) -> int:
+    def write(self, msg: NMLmsg, timeout: float | None = None) -> int:
         """Write a message; returns the serial number given to a command, else 0.
 
         Commands get the next serial number of this buffer, assigned under the mutex, so two
-        writers can never produce the same number (NML-041).
+        writers can never produce the same number (NML-041). ``timeout`` (seconds, < 0
+        forever) replaces the P line's for this write.
         """
+        wait_s = self.timeout if timeout is None else (math.inf if timeout < 0 else timeout)
         self._require_open()
         if not self.process.can_write:
             raise NmlAccessError(
@@ -521,8 +523,8 @@ class ShmBuffer:
                 f"buffer {self.name}: {msg.NAME} is {len(data)} bytes encoded, more than the "
                 f"{limit} the buffer holds (raise its size in the NML file)"
             )
-        deadline = None if math.isinf(self.timeout) else time.monotonic() + self.timeout
-        self._lock()
+        deadline = None if math.isinf(wait_s) else time.monotonic() + wait_s
+        self._lock(wait_s)
         try:
             serial = 0
             if is_command:
@@ -538,9 +540,9 @@ class ShmBuffer:
                     if not self._wait_for_change(lambda: self._queue_has_room(len(data)), deadline):
                         raise NmlTimeoutError(
                             f"buffer {self.name}: queue full ({self._get('count')} messages) for "
-                            f"{describe_timeout(self.timeout)}; {msg.NAME} not written"
+                            f"{describe_timeout(wait_s)}; {msg.NAME} not written"
                         )
-                    self._lock()
+                    self._lock(wait_s)
                 self._queue_put(data)
             else:
                 self._latest_put(data)

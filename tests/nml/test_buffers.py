@@ -287,3 +287,14 @@ def test_peek_into_checks_what_it_copies(opened) -> None:
     master._mm[start : start + 4] = b"\x99\x99\x00\x00"
     with pytest.raises(NmlFormatError, match="unknown message type 39321"):
         reader.peek_into(TEST_STAT())
+
+
+def test_a_write_can_wait_longer_than_its_p_line_says(opened) -> None:
+    master = opened("m", "q")
+    impatient = opened("w", "q")  # P-line timeout 0
+    master._lock()
+    threading.Timer(0.2, master._unlock).start()
+    with pytest.raises(NmlTimeoutError):
+        impatient.write(TEST_CMD())
+    assert impatient.write(TEST_CMD(index=8), timeout=5) > 0  # waits for the lock
+    assert master.read().index == 8
