@@ -91,6 +91,8 @@ class Task:
             max_velocity=self.setup.max_velocity,
             max_acceleration=self.setup.max_acceleration,
             random_toolchanger=self.setup.random_toolchanger,
+            tool_change_position=self.setup.tool_change_position,
+            user_m_commands=self.setup.user_m_commands,
         )
         self.canon = (canon_factory or TaskCanon)(canon_setup)
         self.interp = Interpreter(

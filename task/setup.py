@@ -8,6 +8,7 @@ axis limits.
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -62,6 +63,10 @@ class MachineSetup:
     position_file: str = ""
     is_homing_forced: bool = True
     random_toolchanger: bool = False
+    # [EMCIO]TOOL_CHANGE_POSITION: 3, 6 or 9 machine coordinates (XYZ[ABC[UVW]]), or None
+    tool_change_position: list[float] | None = None
+    # M100..M199 programs found in PROGRAM_PREFIX and USER_M_PATH: M number -> path
+    user_m_commands: dict[int, str] = field(default_factory=dict)
 
     @property
     def axis_mask(self) -> int:
@@ -170,4 +175,44 @@ def load_setup(ini: IniFile) -> MachineSetup:
     setup.position_file = setup.resolve(position_file) if position_file else ""
     setup.is_homing_forced = not ini.get_bool("TRAJ", "NO_FORCE_HOMING", False)
     setup.random_toolchanger = ini.get_bool("EMCIO", "RANDOM_TOOLCHANGER", False)
+    setup.tool_change_position = _tool_change_position(ini)
+    setup.user_m_commands = _user_m_commands(ini, setup)
     return setup
+
+
+def _tool_change_position(ini: IniFile) -> list[float] | None:
+    """Like LinuxCNC, the first 9, 6 or 3 numbers of the value (ABC and UVW default to 0)."""
+    text = ini.find("EMCIO", "TOOL_CHANGE_POSITION")
+    if text is None:
+        return None
+    numbers: list[float] = []
+    for word in text.split():
+        try:
+            numbers.append(float(word))
+        except ValueError:
+            break
+    for count in (9, 6, 3):
+        if len(numbers) >= count:
+            return numbers[:count]
+    entry = ini.entry("EMCIO", "TOOL_CHANGE_POSITION")
+    raise IniError(
+        ini.path if entry is None else entry.file,
+        0 if entry is None else entry.line,
+        f"[EMCIO]TOOL_CHANGE_POSITION = '{text}' needs 3, 6 or 9 numbers (X Y Z [A B C [U V W]])",
+    )
+
+
+def _user_m_commands(ini: IniFile, setup: MachineSetup) -> dict[int, str]:
+    """Executable files M100..M199 in [DISPLAY]PROGRAM_PREFIX (default ``nc_files``), then
+    the ``:``-separated [RS274NGC]USER_M_PATH folders; the first one found wins, as in
+    LinuxCNC. Relative folders are relative to the INI file's folder."""
+    folders = [ini.find("DISPLAY", "PROGRAM_PREFIX") or "nc_files"]
+    folders += [part for part in (ini.find("RS274NGC", "USER_M_PATH") or "").split(":") if part]
+    found: dict[int, str] = {}
+    for number in range(100, 200):
+        for folder in folders:
+            path = Path(setup.resolve(folder)) / f"M{number}"
+            if path.is_file() and os.access(path, os.X_OK):
+                found[number] = str(path)
+                break
+    return found
