@@ -190,15 +190,23 @@ def machine_pids(launcher: subprocess.Popen[str], folder: Path) -> dict[str, int
     return found
 
 
-def test_killing_task_stops_the_machine_and_cleans_up(procs, tmp_path: Path, cnc_instance) -> None:
+@pytest.mark.parametrize(
+    ("process", "name"), [("-m task", "task"), ("hal.rtapi_app", "the realtime host")]
+)
+def test_killing_task_or_the_realtime_host_mid_program_stops_and_cleans_up(
+    process: str, name: str, procs, tmp_path: Path, cnc_instance
+) -> None:
     folder = tmp_path / "machine"
     shutil.copytree(MACHINE, folder)
     proc = procs.python("-m", "cnc", "run", "--headless", "mill.ini", cwd=folder)
-    Machine(proc, folder).wait_ready()
-    (task_pid,) = [pid for line, pid in machine_pids(proc, folder).items() if "-m task" in line]
-    os.kill(task_pid, signal.SIGKILL)
+    machine = Machine(proc, folder)
+    machine.wait_ready()
+    start_long_program(machine)
+    (pid,) = [pid for line, pid in machine_pids(proc, folder).items() if process in line]
+    os.kill(pid, signal.SIGKILL)
     assert proc.wait(timeout=30) == 1  # the launcher noticed and shut everything down
-    assert "task exited unexpectedly" in proc.stderr.read()
+    assert f"{name} exited unexpectedly" in proc.stderr.read()
+    assert all(not Path(f"/proc/{pid}").exists() for pid in machine_pids(proc, folder).values())
     assert instance_objects(cnc_instance) == []
 
 
