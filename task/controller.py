@@ -460,8 +460,8 @@ class Task:
             return
         if self.is_reading_done:
             return
-        if self.is_waiting_for_synch:
-            if not self._is_everything_done():
+        if self.is_waiting_for_synch:  # a queue buster: synch once all it queued is done
+            if self.queue or not self._is_everything_done():
                 return
             self.canon.set_status(self.stat)
             self.interp.synch()

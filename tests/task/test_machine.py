@@ -136,8 +136,10 @@ def test_program_with_a_loop_and_a_tool_change_runs_to_the_end(machine: Machine)
     program = machine.folder / "part.ngc"
     program.write_text(
         "G21 G90 G17\n"
-        "T1 M6\n"
-        "G0 X0 Y0 Z5\n"
+        "G10 L2 P2 X5 Y-2 Z-3\n"  # offsets: G55 moved, then used with the tool length
+        "G10 L1 P2 Z12.5\n"  # a tool table edit from the program
+        "T2 M6 G43\n"
+        "G55 G0 X0 Y0 Z5\n"
         "#1 = 0\n"
         "o100 while [#1 LT 3]\n"
         "  G1 X[10 * [#1 + 1]] F600\n"
@@ -160,8 +162,12 @@ def test_program_with_a_loop_and_a_tool_change_runs_to_the_end(machine: Machine)
     machine.until(lambda s: s.interp_state != cnc.INTERP_IDLE, timeout=5)
     machine.until(lambda s: s.interp_state == cnc.INTERP_IDLE and s.inpos, timeout=30)
     s = machine.stat
-    assert s.position[:3] == pytest.approx((30.0, 0.0, 8.0))
-    assert s.tool_in_spindle == 1
+    assert s.g5x_index == 1  # M2 went back to G54, as in LinuxCNC
+    assert s.tool_offset[2] == pytest.approx(12.5)
+    assert s.position[:3] == pytest.approx((35.0, -2.0, 17.5))  # work (30, 0, 8) in machine
+    assert s.tool_in_spindle == 2 and s.tool_table[2].zoffset == pytest.approx(12.5)
+    assert not s.flood
+    assert "Z+12.5" in (machine.folder / "test.tbl").read_text()
 
 
 def test_sigterm_stops_everything_and_leaves_nothing(procs, tmp_path: Path, cnc_instance) -> None:
