@@ -138,6 +138,10 @@ class IniFile:
                 return entry
         return None
 
+    def entries(self, section: str, key: str) -> list[IniValue]:
+        """Every ``[section]key`` in file order, each with its file and line."""
+        return [entry for name, entry in self._sections.get(section, []) if name == key]
+
     def find(self, section: str, key: str, default: str | None = None) -> str | None:
         """First value of ``[section]key``, or ``default`` (``linuxcnc.ini.find``)."""
         found = self.entry(section, key)

@@ -2,8 +2,9 @@
 
 Start-up, in LinuxCNC's order (ARCH-009/010): the NML buffers (this process is their master),
 the realtime host, iocontrol ([EMCIO]EMCIO, as the userspace HAL component ``iocontrol``),
-the HAL files ([HAL]HALFILE, then [HAL]HALCMD lines, with ``[SECTION]KEY`` taken from the
-INI), task ([TASK]TASK), the display ([DISPLAY]DISPLAY), then [HAL]POSTGUI_HALFILE.
+[HAL]HALUI (``halui`` is ``cnc.halui``), the HAL files ([HAL]HALFILE, then [HAL]HALCMD
+lines, with ``[SECTION]KEY`` taken from the INI), task ([TASK]TASK), the display
+([DISPLAY]DISPLAY), then [HAL]POSTGUI_HALFILE.
 
 Shut-down, when the display exits or on SIGINT/SIGTERM (ARCH-011): display, task (saves
 parameters and positions), HAL (``unload all``: motion, iocontrol, which saves the tool
@@ -97,6 +98,10 @@ class Launcher:
                 "-ini",
                 self.ini_path,
             )
+        halui = (self.ini.find("HAL", "HALUI") or "").strip()
+        if halui:  # before the HAL files, which may net its pins (as LinuxCNC starts it)
+            say(f"starting {halui}")
+            self._halcmd("loadusr", "-Wn", "halui", halui, "-ini", self.ini_path)
         for hal_file in self.ini.findall("HAL", "HALFILE"):
             self._run_hal_file(hal_file)
         for line in self.ini.findall("HAL", "HALCMD"):

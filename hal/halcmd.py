@@ -50,6 +50,7 @@ _ARROWS = ("=>", "<=", "<=>")
 USERSPACE_TOOLS = {
     "halsampler": [sys.executable, "-m", "cnc", "hal", "sample"],
     "halstreamer": [sys.executable, "-m", "cnc", "hal", "stream"],
+    "halui": [sys.executable, "-m", "cnc.halui"],
 }
 
 
