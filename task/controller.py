@@ -669,6 +669,10 @@ class Task:
         motion = self.nml[MOTION_STATUS].peek()
         if motion is not None:
             self.stat.motion = motion
+            # the units are task's (LinuxCNC's emcTrajUpdate fills them in the same way)
+            traj = self.stat.motion.traj
+            traj.linearUnits = self.setup.units_per_mm
+            traj.angularUnits = self.setup.angular_units
         io = self.nml[TOOL_STATUS].peek()
         if io is not None:
             self.stat.io = io

@@ -17,6 +17,15 @@ from motion.pose import AXIS_LETTERS
 from nml import emc
 
 MM_PER_INCH = 25.4
+# [TRAJ]ANGULAR_UNITS -> units per degree (LinuxCNC's traj.angularUnits)
+ANGULAR_UNITS_PER_DEGREE = {
+    "deg": 1.0,
+    "degree": 1.0,
+    "rad": math.pi / 180,
+    "radian": math.pi / 180,
+    "grad": 10 / 9,
+    "gon": 10 / 9,
+}
 
 
 @dataclass
@@ -53,6 +62,7 @@ class MachineSetup:
     folder: Path
     cycle_time: float = 0.01
     linear_units: str = "mm"
+    angular_units: float = 1.0  # LinuxCNC's traj.angularUnits: machine angle units per degree
     coordinates: str = "XYZ"
     joints: list[JointSetup] = field(default_factory=list)
     axes: dict[int, AxisSetup] = field(default_factory=dict)
@@ -67,6 +77,11 @@ class MachineSetup:
     tool_change_position: list[float] | None = None
     # M100..M199 programs found in PROGRAM_PREFIX and USER_M_PATH: M number -> path
     user_m_commands: dict[int, str] = field(default_factory=dict)
+
+    @property
+    def units_per_mm(self) -> float:
+        """LinuxCNC's traj.linearUnits: machine length units per millimetre."""
+        return 1.0 if self.linear_units == "mm" else 1.0 / MM_PER_INCH
 
     @property
     def axis_mask(self) -> int:
@@ -132,6 +147,8 @@ def load_setup(ini: IniFile) -> MachineSetup:
             0 if entry is None else entry.line,
             f"[TRAJ]LINEAR_UNITS = '{units}' is not mm or inch",
         )
+    angular = (ini.find("TRAJ", "ANGULAR_UNITS", "degree") or "degree").lower()
+    setup.angular_units = ANGULAR_UNITS_PER_DEGREE.get(angular, 1.0)
     coordinates = (ini.find("TRAJ", "COORDINATES") or "XYZ").replace(" ", "").upper()
     setup.coordinates = coordinates
     num_joints = ini.get_int("KINS", "JOINTS", len(coordinates))

@@ -73,6 +73,8 @@ def test_sim_machine_homes_moves_and_changes_tools(
         stat = cnc.stat()
         stat.poll()
         assert stat.task_state == cnc.STATE_ON and all(stat.homed[: stat.joints])
+        assert stat.linear_units == pytest.approx(1 / 25.4 if name == "mill_inch" else 1.0)
+        assert stat.angular_units == 1.0
         for letter, value in expected.items():
             work = stat.position[AXES.index(letter)] - stat.g5x_offset[AXES.index(letter)]
             work -= stat.g92_offset[AXES.index(letter)] + stat.tool_offset[AXES.index(letter)]
