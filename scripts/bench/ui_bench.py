@@ -1,7 +1,9 @@
 #!/usr/bin/env python3
-"""Web UI benchmark: status-to-browser latency and server CPU with 1, 5, 20 clients (JSON).
+"""Web UI benchmark: status-to-browser latency and server CPU with 1, 5, 20 clients, and
+HAL-pin-to-dialog latency (JSON).
 
     python scripts/bench/ui_bench.py [--seconds S] [--clients 1,5,20] [--cycle-ms MS]
+                                     [--dialogs N]
 
 Creates the controller's buffers (configs/common/cnc.nml) in a private instance, starts
 ``cnc ui web`` (a real process) on a free loopback port, and connects N websocket clients.
@@ -11,6 +13,10 @@ arrival - write (both in this process), so it includes the wait for the server's
 [DISPLAY]CYCLE_TIME poll (default 100 ms: about half of it on average).
 Server CPU = its user+system time over the run / the run's wall time, in percent of a core.
 Keys per client count: latency_ms_median, latency_ms_p99, updates_per_client, cpu_percent.
+Dialogs: a HAL of the private instance, a [DISPLAY] MESSAGE_* okdialog on pin
+web.messages.bench, driven by a component of this process; latency = rising edge written ->
+"dialog" message at one client (again bounded below by the server's poll cycle), N times,
+answered each time. Keys: dialog_ms_median, dialog_ms_max.
 """
 
 from __future__ import annotations
@@ -35,6 +41,8 @@ os.environ["CNC_INSTANCE"] = f"uibench{os.getpid()}"
 
 import aiohttp  # noqa: E402
 
+from hal.api import HAL_BIT, HAL_OUT, component  # noqa: E402
+from hal.core import Hal  # noqa: E402
 from nml import emc  # noqa: E402
 from nml.channels import EMC_COMMAND, EMC_ERROR, EMC_STATUS, Nml, load_config  # noqa: E402
 from nml.ipcnames import remove_instance_objects  # noqa: E402
@@ -43,6 +51,7 @@ from nml.ipcnames import remove_instance_objects  # noqa: E402
 # fall at one phase of the server's cycle): every change is seen.
 WRITE_PERIODS = 1.5
 SERVER_MAIN = "import sys; from cnc.ui.web.server import main; sys.exit(main(sys.argv[1:]))"
+MESSAGE = "MESSAGE_TEXT = bench\nMESSAGE_TYPE = okdialog\nMESSAGE_PINNAME = bench\n"
 
 
 def percentile(values: list[float], fraction: float) -> float:
@@ -114,6 +123,31 @@ async def measure(url: str, clients: int, seconds: float, writer: Writer) -> dic
     }
 
 
+async def dialog_latency(url: str, driver: component, count: int, period: float) -> dict:
+    """Raise the message pin ``count`` times (at a random phase of the server's cycle); the
+    time until the dialog reaches the page, each answered before the next."""
+    latencies: list[float] = []
+
+    async def until(ws: aiohttp.ClientWebSocketResponse, kind: str) -> None:
+        while (await ws.receive_json(timeout=10))["type"] != kind:
+            pass
+
+    async with aiohttp.ClientSession() as session, session.ws_connect(url) as ws:
+        for number in range(count):
+            driver["out"] = True
+            start = time.perf_counter()
+            await until(ws, "dialog")
+            latencies.append((time.perf_counter() - start) * 1000)
+            driver["out"] = False
+            await ws.send_json({"cmd": "answer", "name": "bench", "is_yes": True, "id": number})
+            await until(ws, "dialog_close")
+            await asyncio.sleep(period * (1.5 + random.random()))  # the server sees it low
+    return {
+        "dialog_ms_median": round(percentile(latencies, 0.5), 2),
+        "dialog_ms_max": round(max(latencies, default=0.0), 2),
+    }
+
+
 def wait_for_server(port: int, proc: subprocess.Popen[bytes]) -> None:
     deadline = time.monotonic() + 20
     while time.monotonic() < deadline:
@@ -131,12 +165,16 @@ def main() -> int:
     parser.add_argument("--seconds", type=float, default=3.0, help="per client count")
     parser.add_argument("--clients", default="1,5,20")
     parser.add_argument("--cycle-ms", type=float, default=100.0, help="[DISPLAY]CYCLE_TIME")
+    parser.add_argument("--dialogs", type=int, default=20, help="message dialogs to time")
     args = parser.parse_args()
     results: dict[str, object] = {"cycle_ms": args.cycle_ms}
     with tempfile.TemporaryDirectory() as folder:
         ini = Path(folder) / "bench.ini"
         nml_file = REPO / "configs" / "common" / "cnc.nml"
-        ini.write_text(f"[EMC]\nNML_FILE = {nml_file}\n[DISPLAY]\nCYCLE_TIME = {args.cycle_ms}\n")
+        ini.write_text(
+            f"[EMC]\nNML_FILE = {nml_file}\n[DISPLAY]\nCYCLE_TIME = {args.cycle_ms}\n{MESSAGE}"
+        )
+        hal = Hal()  # the server's message pins need a HAL, as on a running machine
         try:
             with Nml(load_config(), "cnc", [EMC_COMMAND, EMC_STATUS, EMC_ERROR]) as nml:
                 writer = Writer(nml[EMC_STATUS], args.cycle_ms / 1000 * WRITE_PERIODS)
@@ -160,6 +198,17 @@ def main() -> int:
                         used = cpu_seconds(server.pid) - before
                         found["cpu_percent"] = round(100 * used / wall, 1)
                         results[f"clients_{clients}"] = found
+                    driver = component("driver", hal=hal)
+                    driver.newpin("out", HAL_BIT, HAL_OUT)
+                    hal.new_signal("bench", HAL_BIT)
+                    hal.link("driver.out", "bench")
+                    hal.link("web.messages.bench", "bench")
+                    url = f"http://127.0.0.1:{port}/ws"
+                    period = args.cycle_ms / 1000
+                    results["dialogs"] = asyncio.run(
+                        dialog_latency(url, driver, args.dialogs, period)
+                    )
+                    driver.exit()
                 finally:
                     server.send_signal(signal.SIGTERM)
                     try:
@@ -169,6 +218,7 @@ def main() -> int:
                     writer.is_running = False
                     writer.join()
         finally:
+            hal.close()
             remove_instance_objects(os.environ["CNC_INSTANCE"])
     print(json.dumps(results, indent=2))
     return 0

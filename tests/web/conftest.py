@@ -1,15 +1,26 @@
-"""Fixtures of the web UI tests: the UI tests' buffers and fake task, and the server's app.
+"""Fixtures of the web UI tests: the UI tests' buffers and fake task, the server's app, and
+a real machine with the server as its own process.
 
 ``web`` starts the app (cnc/ui/web/server.py) against the fake task's buffers in
 pytest-aiohttp's test server and returns its client; ``receive_until`` reads a websocket
-until a wanted message arrives.
+until a wanted message arrives. ``machine`` runs ``cnc run --headless`` on a copy of
+tests/task/machine/mill.ini with [DISPLAY] message keys and a program; ``page_url`` starts
+``cnc ui web`` on it.
 """
 
 from __future__ import annotations
 
 import asyncio
+import shutil
+import signal
+import socket
+import subprocess
+import time
+import urllib.error
+import urllib.request
 import weakref
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from pathlib import Path
 from typing import Any
 
 import aiohttp
@@ -17,6 +28,8 @@ import pytest
 
 from cnc.ui.web.server import Access, make_app
 from cnc.ui.web.settings import Settings
+from tests.conftest import Processes
+from tests.task.test_machine import MACHINE, Machine
 from tests.ui.conftest import controller, fake_task, runtime_dir  # noqa: F401 (fixtures)
 
 WAIT_S = 20.0  # generous: only reached when something is broken
@@ -63,3 +76,73 @@ def is_result(number: int) -> Callable[[dict[str, Any]], bool]:
 
 def is_status_with(key: str, value: Any) -> Callable[[dict[str, Any]], bool]:
     return lambda message: message["type"] == "status" and message["data"].get(key) == value
+
+
+# ------------------------------------------------------------------ a real machine
+SERVER_MAIN = "import sys; from cnc.ui.web.server import main; sys.exit(main(sys.argv[1:]))"
+# [DISPLAY] user messages of the test machine (GUI-018): pins web.messages.door...
+MESSAGES = """\
+MESSAGE_BOLDTEXT = Door
+MESSAGE_TEXT = Is the door closed?
+MESSAGE_DETAILS = The interlock switch reports it open.
+MESSAGE_TYPE = yesnodialog
+MESSAGE_PINNAME = door
+MESSAGE_ICON = WARNING
+"""
+PART = "G21 G90\nG0 X1 Y2\nG3 X3 Y2 I1 F600\nM2\n"  # ends at X3 Y2
+
+
+def free_port() -> int:
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return probe.getsockname()[1]
+
+
+def wait_http(url: str, proc: subprocess.Popen[str], timeout: float = 30) -> None:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        assert proc.poll() is None, proc.stderr.read() if proc.stderr else ""
+        try:
+            with urllib.request.urlopen(url, timeout=2):
+                return
+        except (urllib.error.URLError, ConnectionError):
+            time.sleep(0.1)
+    raise AssertionError(f"{url} never answered")
+
+
+@pytest.fixture
+def machine(procs: Processes, tmp_path: Path) -> Iterator[Machine]:
+    folder = tmp_path / "machine"
+    shutil.copytree(MACHINE, folder)
+    ini = folder / "mill.ini"
+    ini.write_text(ini.read_text().replace("[DISPLAY]\n", "[DISPLAY]\n" + MESSAGES, 1))
+    (folder / "part.ngc").write_text(PART)
+    proc = procs.python("-m", "cnc", "run", "--headless", "mill.ini", cwd=folder)
+    found = Machine(proc, folder)
+    try:
+        found.wait_ready()
+        yield found
+    finally:
+        proc.send_signal(signal.SIGTERM)
+        try:
+            proc.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+
+
+@pytest.fixture
+def page_url(machine: Machine, procs: Processes) -> Iterator[str]:
+    """``cnc ui web`` on the machine, as its own process; its address. Stopped before the
+    machine (it removes its HAL component then)."""
+    port = free_port()
+    server = procs.python(
+        "-c", SERVER_MAIN, "web", "mill.ini", "--port", str(port), cwd=machine.folder
+    )
+    url = f"http://127.0.0.1:{port}/"
+    wait_http(url, server)
+    yield url
+    server.send_signal(signal.SIGTERM)
+    try:
+        server.wait(timeout=10)
+    except subprocess.TimeoutExpired:
+        server.kill()

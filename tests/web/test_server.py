@@ -289,18 +289,42 @@ async def test_an_upload_is_refused(
     assert list(folder.iterdir()) == []
 
 
-async def test_tool_edits_are_g10_l1_lines(fake_task, web) -> None:
+async def test_a_tool_edit_rewrites_the_tool_table_and_has_iocontrol_reload_it(
+    fake_task, web, tmp_path: Path
+) -> None:
     task = fake_task()
+    table = tmp_path / "tool.tbl"
+    table.write_text("T1 P1 Z10 D6 ;end mill\nT2 P2 Y0.5 Z20 D3 ;drill\n")
+    client = await web(Settings(cycle_time_s=0.02, tool_table=table))
+    async with client.ws_connect("/ws") as socket:
+        edit = {"cmd": "tool_set", "tool": 2, "z": "1,5", "diameter": "6,35", "id": 1}
+        await socket.send_json(edit | {"comment": "new\ndrill"})
+        assert (await receive_until(socket, is_result(1)))["status"] == "DONE"
+        # LinuxCNC's tool editors: the whole file, then EMC_TOOL_LOAD_TOOL_TABLE
+        assert table.read_text() == (
+            "T1   P1   D+6.000000 Z+10.000000 ;end mill\n"
+            "T2   P2   D+6.350000 Y+0.500000 Z+1.500000 ;new drill\n"
+        )
+        assert without_serial(task.next_command()) == ("EMC_TOOL_LOAD_TOOL_TABLE", {"file": ""})
+        await socket.send_json(edit | {"tool": 9, "id": 2})
+        refused = await receive_until(socket, is_result(2))
+        assert refused["status"] == "ERROR"
+        assert refused["message"] == f"tool_set: no tool 9 in {table}"
+        table.write_text("T1 P1 Z10\nT2 P2 Z1 K7\n")
+        await socket.send_json(edit | {"id": 3})
+        refused = await receive_until(socket, is_result(3))
+        assert refused["message"].startswith(f"tool_set: {table}:2: ")
+        assert table.read_text() == "T1 P1 Z10\nT2 P2 Z1 K7\n"  # left as it was
+    assert (await (await client.get("/api/tools")).json()) == {"tools": []}  # no iocontrol
+
+
+async def test_no_tool_edit_without_a_tool_table_file(fake_task, web) -> None:
+    fake_task()
     client = await web()
     async with client.ws_connect("/ws") as socket:
-        await socket.send_json({"cmd": "tool_set", "tool": 2, "z": "1,5", "diameter": 6, "id": 1})
-        assert (await receive_until(socket, is_result(1)))["status"] == "DONE"
-    received = [without_serial(task.next_command()) for _ in range(2)]
-    assert received[1] == (
-        "EMC_TASK_PLAN_EXECUTE",
-        {"command": "G10 L1 P2 Z1.500000 R3.000000"},
-    )
-    assert (await (await client.get("/api/tools")).json()) == {"tools": []}  # no iocontrol
+        await socket.send_json({"cmd": "tool_set", "tool": 1, "z": 1, "diameter": 2, "id": 1})
+        refused = await receive_until(socket, is_result(1))
+    assert refused["message"] == "tool_set: the INI file names no [EMCIO]TOOL_TABLE"
 
 
 async def test_a_macro_runs_its_lines_in_order_and_mdi_lines_are_kept(

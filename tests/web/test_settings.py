@@ -107,3 +107,20 @@ def test_a_lathe_is_recognised_by_the_hint_or_the_old_switch(
     settings = Settings.load(str(ini))
     assert settings.is_lathe is is_lathe
     assert (settings.spindle["min"], settings.spindle["max"]) == (50, 900)
+
+
+def test_the_message_pins_and_the_tool_changer_come_from_the_ini(tmp_path: Path) -> None:
+    ini = tmp_path / "m.ini"
+    ini.write_text(
+        "[DISPLAY]\nMESSAGE_TEXT = Lube\nMESSAGE_TYPE = okdialog\nMESSAGE_PINNAME = lube\n"
+        "MESSAGE_TEXT = Air\nMESSAGE_TYPE = dialog\nMESSAGE_PINNAME = air\n"
+        "[EMCIO]\nTOOL_TABLE = t.tbl\nRANDOM_TOOLCHANGER = 1\n"
+    )
+    settings = Settings.load(str(ini))
+    assert [pin.name for pin in settings.message_pins] == ["lube"]
+    assert settings.problems == [
+        f"{ini}:6: [DISPLAY]MESSAGE_TYPE = dialog: expected status and/or one of okdialog, "
+        "yesnodialog, nonedialog"
+    ]
+    assert settings.tool_table == tmp_path / "t.tbl" and settings.is_random_toolchanger
+    assert Settings().message_pins == [] and not Settings().is_random_toolchanger

@@ -21,11 +21,13 @@ from typing import Any
 import cnc
 from cnc.ui.formatting import parse_float
 from cnc.ui.web.settings import Settings
+from iocontrol.tooltable import ToolTable, ToolTableError
 
 TIMEOUT_S = 10.0  # how long a command may take before the page is told it still runs
 PROGRAM_TIMEOUT_S = 3600.0  # an MDI line may be a long move
 WAIT_SLICE_S = 0.5
 FILTER_TIMEOUT_S = 120.0  # a [FILTER] program converting an image may take a while
+TOOL_FILE_LOCK = threading.Lock()  # one tool edit at a time (the file is read, then written)
 
 
 class CommandError(Exception):
@@ -201,6 +203,19 @@ class Commands:
         return sorted(found)
 
 
+def tool_comments(path: Path | None, is_random: bool) -> dict[int, str]:
+    """Tool number -> the comment of its line in the tool table file (empty if unreadable:
+    the table itself comes from iocontrol, stat.tool_table)."""
+    if path is None:
+        return {}
+    table = ToolTable(is_random)
+    try:
+        table.load(path, strict=False)
+    except OSError:
+        return {}
+    return {entry.toolno: entry.comment for entry in table.entries.values()}
+
+
 def _read_history(path: Path | None) -> list[str]:
     if path is None:
         return []
@@ -284,13 +299,46 @@ def _touch_off(c: Commands, r: dict[str, Any]) -> None:
 
 @handler("tool_set")
 def _tool_set(c: Commands, r: dict[str, Any]) -> None:
-    """Set a tool's Z offset and diameter in the tool table (G10 L1: iocontrol saves it)."""
+    """{"tool": n, "z": ..., "diameter": ..., "x": ... and "comment": ... optional}: edit
+    one tool, as LinuxCNC's tool editors do: the tool table file is rewritten (atomically),
+    then iocontrol reloads it (EMC_TOOL_LOAD_TOOL_TABLE), so stat.tool_table and the
+    interpreter's copy follow. Works in any state, but not while a program or MDI runs
+    (it may change the table itself)."""
     tool = whole(r, "tool")
     if tool <= 0:
         raise CommandError("'tool' must be at least 1")
     z, diameter = number(r, "z"), number(r, "diameter", 0.0)
-    c.ensure_mode(cnc.MODE_MDI)
-    c.send("mdi", f"G10 L1 P{tool} Z{z:.6f} R{diameter / 2:.6f}")
+    x = number(r, "x") if "x" in r else None
+    comment = " ".join(str(r["comment"]).split()) if "comment" in r else None
+    path = c.settings.tool_table
+    if path is None:
+        raise CommandError("the INI file names no [EMCIO]TOOL_TABLE")
+    if c.stat.interp_state != cnc.INTERP_IDLE:
+        raise CommandError("not while a program or MDI command runs")
+    with TOOL_FILE_LOCK:
+        table = ToolTable(c.settings.is_random_toolchanger)
+        try:
+            table.load(path)
+        except ToolTableError as exc:
+            raise CommandError(f"{exc}; fix the file first") from None
+        except OSError as exc:
+            raise CommandError(f"cannot read {path}: {exc.strerror}") from None
+        index = table.find_index_for_tool(tool)
+        if index < 0:
+            raise CommandError(f"no tool {tool} in {path}")
+        entry = table.get(index)
+        entry.offset[2] = z
+        entry.diameter = diameter
+        if x is not None:
+            entry.offset[0] = x
+        if comment is not None:
+            entry.comment = comment
+        table.put(index, entry)
+        try:
+            table.save(path)
+        except OSError as exc:
+            raise CommandError(f"cannot write {path}: {exc.strerror}") from None
+    c.send("load_tool_table")
 
 
 # ------------------------------------------------------------------ MDI

@@ -8,8 +8,11 @@ One process attaches to the controller like any UI (``cnc.stat``, ``cnc.command`
   the fields that changed, every [DISPLAY]CYCLE_TIME), ``{"type": "notice", "kind":
   "error"|"text"|"display", "text": ...}`` for each operator message, ``{"type": "result",
   "id": ..., "status": "DONE"|"ERROR", "message": ...}`` for each command, ``{"type":
-  "history", "lines": [...]}`` when the MDI history grows.
-- page -> server: ``{"cmd": NAME, "id": ..., ...arguments}`` (commands.py lists them).
+  "history", "lines": [...]}`` when the MDI history grows, ``{"type": "dialog", "name":
+  pin, "kind": "ok"|"yesno"|"none", "title", "text", "details", "icon"}`` and ``{"type":
+  "dialog_close", "name": pin}`` for the [DISPLAY] message dialogs (messages.py).
+- page -> server: ``{"cmd": NAME, "id": ..., ...arguments}`` (commands.py lists them;
+  ``{"cmd": "answer", "name": pin, "is_yes": bool}`` answers a message dialog).
 
 HTTP: ``/`` the page, ``/static/*`` its assets, ``/api/config`` what the page offers (from
 the INI), ``/api/files`` the programs of PROGRAM_PREFIX, ``/api/program`` the lines of the
@@ -50,10 +53,12 @@ import cnc
 from cnc.ini import IniError, IniFile
 from cnc.ui.controller import Controller
 from cnc.ui.formatting import MESSAGE_KINDS
-from cnc.ui.web.commands import CommandError, Commands
+from cnc.ui.web.commands import CommandError, Commands, tool_comments
+from cnc.ui.web.messages import UserMessages
 from cnc.ui.web.preview import preview
 from cnc.ui.web.settings import Settings
 from cnc.ui.web.status import DISCONNECTED, diff, snapshot
+from hal.core import HalError
 
 STATIC = Path(__file__).with_name("static")
 DEFAULT_HOST, DEFAULT_PORT = "127.0.0.1", 8750
@@ -91,6 +96,8 @@ class Hub:
         self._tasks: set[asyncio.Task[Any]] = set()
         self.preview_key: tuple[str, int] | None = None  # (file, mtime) of preview_result
         self.preview_result: dict[str, Any] = {}
+        self.messages = UserMessages(settings.message_pins)  # [DISPLAY] MESSAGE_* dialogs
+        self.problems = list(settings.problems)  # shown to every page that connects
 
     # ---------------------------------------------------------------- status
     def poll(self) -> list[dict[str, Any]]:
@@ -109,7 +116,7 @@ class Hub:
         for message in messages:
             kind = MESSAGE_KINDS.get(message.kind, "text")
             outgoing.append({"type": "notice", "kind": kind, "text": message.text})
-        return outgoing
+        return outgoing + self.messages.poll()
 
     async def _poll_forever(self) -> None:
         """Poll every cycle_time_s, on a fixed schedule (a late cycle does not shift the
@@ -129,6 +136,13 @@ class Hub:
             await send(client, text)
 
     async def start(self, _app: web.Application) -> None:
+        if self.messages.pins:
+            try:
+                self.messages.open()
+            except HalError as exc:
+                self.problems.append(f"[DISPLAY] MESSAGE_* pins not created: {exc}")
+        for problem in self.problems:
+            print(f"cnc ui web: {problem}", file=sys.stderr, flush=True)
         self._poller = asyncio.create_task(self._poll_forever())
 
     async def stop(self, _app: web.Application) -> None:
@@ -142,6 +156,7 @@ class Hub:
         for executor in (self.executor, self.urgent_executor):
             executor.shutdown(wait=False, cancel_futures=True)
         self.controller.close()
+        self.messages.close()
 
     # ---------------------------------------------------------------- commands
     async def run(self, client: Client, request: dict[str, Any]) -> dict[str, Any]:
@@ -150,6 +165,8 @@ class Hub:
         if not client.is_control:
             return answer | {"status": "ERROR", "message": "read-only access: command refused"}
         name = request.get("cmd")
+        if name == "answer":  # a message dialog: answered here, in the event loop
+            return answer | await self._answer_dialog(request)
         if name == "jog":
             async with client.jog_lock:  # a stop must never overtake its start
                 self._track_jog(client, request)
@@ -159,6 +176,15 @@ class Hub:
         if name in ("mdi", "macro"):
             await self.broadcast({"type": "history", "lines": list(self.commands.mdi_history)})
         return answer | outcome
+
+    async def _answer_dialog(self, request: dict[str, Any]) -> dict[str, Any]:
+        """{"cmd": "answer", "name": pin name, "is_yes": bool}: close the dialog everywhere."""
+        try:
+            closing = self.messages.answer(request.get("name"), request.get("is_yes"))
+        except ValueError as exc:
+            return {"status": "ERROR", "message": f"answer: {exc}"}
+        await self.broadcast(closing)
+        return {"status": "DONE", "message": "DONE"}
 
     async def _execute(self, request: dict[str, Any]) -> dict[str, Any]:
         loop = asyncio.get_running_loop()
@@ -336,17 +362,23 @@ async def toolpath(request: web.Request) -> web.Response:
 
 
 async def tools(request: web.Request) -> web.Response:
-    """The tool table (iocontrol's, through stat.tool_table; index 0 is the spindle)."""
+    """The tool table (iocontrol's, through stat.tool_table; index 0 is the spindle), with
+    the comments of the tool table file."""
     hub = request.app[HUB]
     try:
         table = hub.controller.poll().tool_table
     except cnc.error:
         table = ()
+    settings = hub.settings
+    loop = asyncio.get_running_loop()
+    comments = await loop.run_in_executor(
+        hub.executor, tool_comments, settings.tool_table, settings.is_random_toolchanger
+    )
     entries = [
         {"tool": entry.id, "index": index, "z": entry.zoffset, "x": entry.xoffset,
-         "diameter": entry.diameter}
+         "diameter": entry.diameter, "comment": comments.get(entry.id, "")}
         for index, entry in enumerate(table)
-        if index > 0 and entry.id > 0
+        if entry.id > 0 and (index > 0 or settings.is_random_toolchanger)  # 0: the spindle
     ]  # fmt: skip
     return web.json_response({"tools": entries})
 
@@ -394,6 +426,10 @@ async def websocket(request: web.Request) -> web.WebSocketResponse:
             client, json.dumps({"type": "config", "data": hub.page_config(client.is_control)})
         )
         await send(client, json.dumps({"type": "status", "data": hub.status}))
+        for problem in hub.problems:
+            await send(client, json.dumps({"type": "notice", "kind": "error", "text": problem}))
+        for dialog in hub.messages.open_dialogs():
+            await send(client, json.dumps(dialog))
         async for message in socket:
             if message.type != WSMsgType.TEXT:
                 continue
@@ -499,7 +535,7 @@ def main(argv: list[str]) -> int:
     try:
         ini = args.ini or running_ini()
         settings = Settings.load(ini) if ini else Settings()
-    except cnc.error as exc:
+    except (cnc.error, IniError) as exc:  # IniError: "file:line: cause"
         print(f"cnc ui web: {exc}", file=sys.stderr)
         return 2
     app = make_app(settings, args.ini, Access(args.token, args.read_only_token))

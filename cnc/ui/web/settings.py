@@ -1,4 +1,5 @@
 """What the web UI takes from the INI file: [DISPLAY], [MDI_COMMAND_LIST], [FILTER].
+([DISPLAY] MESSAGE_* and MULTIMESSAGE_* are read by messages.py.)
 
 ``Settings.load(path)`` reads every value once at start; ``Settings()`` is a machine without
 an INI file (defaults only). ``page_config()`` is the part the page needs, as JSON.
@@ -15,6 +16,7 @@ from typing import Any
 import cnc
 from cnc.ini import IniFile
 from cnc.ui.formatting import AXIS_LETTERS
+from cnc.ui.web.messages import MessagePin, read_message_pins
 
 DEFAULT_CYCLE_TIME_S = 0.1
 DEFAULT_INCREMENTS = "continuous, 10 mm, 1 mm, 0.1 mm, 0.01 mm"
@@ -130,13 +132,17 @@ class Settings:
     extensions: tuple[str, ...] = DEFAULT_EXTENSIONS
     mdi_history_file: Path | None = None
     parameter_file: Path | None = None  # [RS274NGC]PARAMETER_FILE, for the preview
-    tool_table: Path | None = None  # [EMCIO]TOOL_TABLE, for the preview
+    tool_table: Path | None = None  # [EMCIO]TOOL_TABLE, for the preview and tool edits
+    is_random_toolchanger: bool = False  # [EMCIO]RANDOM_TOOLCHANGER: pockets are indexes
     limits: dict[str, list[float]] = field(default_factory=dict)  # axis -> [min, max]
     filters: dict[str, str] = field(default_factory=dict)  # [FILTER] extension -> program
+    message_pins: list[MessagePin] = field(default_factory=list)  # GUI-018/019
+    problems: list[str] = field(default_factory=list)  # "file:line: cause", shown to pages
 
     @classmethod
     def load(cls, path: str) -> Settings:
-        """The settings of the INI file at ``path``; ``cnc.error`` if it cannot be read."""
+        """The settings of the INI file at ``path``; ``cnc.error`` if it cannot be read,
+        ``IniError`` for a bad value that cannot be ignored."""
         ini = cnc.ini(path)
         folder = Path(path).resolve().parent
 
@@ -159,6 +165,8 @@ class Settings:
             patterns = entry.split()[0] if entry.split() else ""
             extensions += [ext.strip().lower() for ext in patterns.split(",") if ext.strip()]
         prefix = ini_path(display("PROGRAM_PREFIX"), folder)
+        parsed = IniFile.load(path)
+        message_pins, problems = read_message_pins(parsed)
         return cls(
             ini_file=str(Path(path).resolve()),
             machine=ini.find("EMC", "MACHINE") or "",
@@ -201,8 +209,11 @@ class Settings:
             mdi_history_file=ini_path(display("MDI_HISTORY_FILE"), folder),
             parameter_file=ini_path(ini.find("RS274NGC", "PARAMETER_FILE"), folder),
             tool_table=ini_path(ini.find("EMCIO", "TOOL_TABLE"), folder),
+            is_random_toolchanger=bool(parsed.get_bool("EMCIO", "RANDOM_TOOLCHANGER", False)),
             limits=_limits(ini, coordinates),
-            filters=_filters(path),
+            filters=_filters(parsed),
+            message_pins=message_pins,
+            problems=problems,
         )
 
     def page_config(self) -> dict[str, Any]:
@@ -255,10 +266,10 @@ def _limits(ini: Any, letters: str) -> dict[str, list[float]]:
     return found
 
 
-def _filters(path: str) -> dict[str, str]:
+def _filters(ini: IniFile) -> dict[str, str]:
     """[FILTER] ``<ext> = <program>`` lines (GUI-015): ".png" -> "image-to-gcode"."""
     found = {}
-    for key, value in IniFile.load(path).items("FILTER"):
+    for key, value in ini.items("FILTER"):
         if key != "PROGRAM_EXTENSION" and value.strip():
             found["." + key.lower().lstrip(".")] = value.strip()
     return found

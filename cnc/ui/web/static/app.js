@@ -46,6 +46,37 @@ function notice(kind, text) {
   while ($("notices").children.length > 8) $("notices").lastChild.remove();
 }
 
+// [DISPLAY] MESSAGE_* / MULTIMESSAGE_* dialogs, shown while the server says one is open
+// (its HAL pin rose); the first answer from any page closes it in all of them.
+function showDialog(d) {
+  closeDialog(d.name);
+  const box = document.createElement("div");
+  box.className = `dialog ${d.icon.toLowerCase()}`;
+  box.dataset.name = d.name;
+  box.setAttribute("role", "alertdialog");
+  if (d.title) box.append(Object.assign(document.createElement("h3"), { textContent: d.title }));
+  box.append(Object.assign(document.createElement("p"), { textContent: d.text }));
+  if (d.details) {
+    const more = document.createElement("details");
+    more.append(Object.assign(document.createElement("summary"), { textContent: "Details" }), d.details);
+    box.append(more);
+  }
+  const answers = { ok: [["OK", true]], yesno: [["Yes", true], ["No", false]], none: [] }[d.kind] || [];
+  const row = document.createElement("div");
+  row.className = "row";
+  for (const [label, isYes] of answers) {
+    const button = Object.assign(document.createElement("button"), { textContent: label });
+    button.onclick = () => send("answer", { name: d.name, is_yes: isYes });
+    row.append(button);
+  }
+  box.append(row);
+  $("dialogs").append(box);
+}
+
+function closeDialog(name) {
+  for (const box of [...$("dialogs").children]) if (box.dataset.name === name) box.remove();
+}
+
 // Send a command; the promise gets the server's result {status, message}.
 function send(cmd, args = {}) {
   return new Promise((resolve) => {
@@ -84,6 +115,8 @@ function receive(message) {
   else if (message.type === "status") update(message.data);
   else if (message.type === "notice") notice(message.kind, message.text);
   else if (message.type === "history") showHistory(message.lines);
+  else if (message.type === "dialog") showDialog(message);
+  else if (message.type === "dialog_close") closeDialog(message.name);
   else if (message.type === "result") {
     const done = pending.get(message.id);
     pending.delete(message.id);
@@ -100,6 +133,7 @@ function setup(data) {
   document.body.classList.toggle("machine-first", !data.is_position_relative);
   $("machine-name").textContent = data.machine;
   document.body.classList.toggle("read-only", !data.is_control);
+  document.body.classList.toggle("lathe", data.is_lathe);
   buildJog(data.axes);
   setJogChoices("increment", "jog-speed", data.increments, data.jog_speed);
   setJogChoices("angular-increment", "angular-speed", data.angular_increments, data.angular_jog_speed);
@@ -337,11 +371,10 @@ $("program-open").onclick = () => {
   if (file) send("open", { file });
 };
 $("program-refresh").onclick = loadFiles;
-$("run").onclick = () => {
+$("run").onclick = () => {  // "from line": a whole line number, or empty for the start
   const text = $("run-line").value.trim();
-  const line = text ? parseInt(text, 10) : 0;
-  if (Number.isNaN(line)) notice("error", `'${text}' is not a line number`);
-  else send("run", { line });
+  if (text && !/^[0-9]+$/.test(text)) notice("error", `'${text}' is not a line number`);
+  else send("run", { line: text ? Number(text) : 0 });
 };
 $("pause").onclick = () => send("pause");
 $("resume").onclick = () => send("resume");
@@ -595,29 +628,47 @@ async function loadTools() {
   const answer = await (await fetch(withToken("/api/tools"))).json();
   $("tools").tBodies[0].replaceChildren(...answer.tools.map((entry) => {
     const row = document.createElement("tr");
+    row.dataset.tool = entry.tool;
     row.classList.toggle("in-spindle", entry.tool === status.tool);
-    row.innerHTML = `<td>T${entry.tool}</td><td>${fixed(entry.z)}</td><td>${fixed(entry.diameter)}</td>` +
-      "<td><button>Edit</button></td>";
-    row.querySelector("button").onclick = () => editTool(entry);
+    const cells = [`T${entry.tool}`, fixed(entry.z), fixed(entry.x), fixed(entry.diameter), entry.comment, ""];
+    for (const text of cells) row.insertCell().textContent = text;
+    row.cells[2].className = "lathe-only";
+    row.cells[4].className = "comment";
+    const edit = Object.assign(document.createElement("button"), { textContent: "Edit" });
+    edit.onclick = () => editTool(row, entry);
+    row.cells[5].append(edit);
     return row;
   }));
 }
 
-function askNumber(question, value) {
-  const answer = prompt(question, fixed(value));
-  if (answer === null) return null;
-  const found = parseDecimal(answer);
-  if (found === null) notice("error", `'${answer}' is not a number`);
-  return found;
-}
-
-async function editTool(entry) {
-  const z = askNumber(`T${entry.tool} Z offset:`, entry.z);
-  if (z === null) return;
-  const diameter = askNumber(`T${entry.tool} diameter:`, entry.diameter);
-  if (diameter === null) return;
-  const result = await send("tool_set", { tool: entry.tool, z, diameter });
-  if (result.status === "DONE") loadTools();
+// A tool row becomes a small form: numbers take ',' or '.' (GUI-003); Save sends tool_set,
+// which rewrites the tool table file and has iocontrol reload it.
+function editTool(row, entry) {
+  const field = (cell, value, name, isNumber = true) => {
+    const input = Object.assign(document.createElement("input"), { value, name });
+    if (isNumber) { input.inputMode = "decimal"; input.className = "number"; }
+    row.cells[cell].replaceChildren(input);
+    return input;
+  };
+  const z = field(1, fixed(entry.z), "z");
+  const x = field(2, fixed(entry.x), "x");
+  const diameter = field(3, fixed(entry.diameter), "diameter");
+  const comment = field(4, entry.comment, "comment", false);
+  const save = Object.assign(document.createElement("button"), { textContent: "Save" });
+  const cancel = Object.assign(document.createElement("button"), { textContent: "Cancel" });
+  cancel.onclick = loadTools;
+  save.onclick = async () => {
+    const values = {};
+    for (const [name, input] of Object.entries({ z, diameter, ...(config.is_lathe ? { x } : {}) })) {
+      values[name] = parseDecimal(input.value);
+      if (values[name] === null) { notice("error", `${name}: '${input.value}' is not a number`); return; }
+    }
+    const result = await send("tool_set", { tool: entry.tool, ...values, comment: comment.value });
+    if (result.status === "DONE") loadTools();
+  };
+  row.cells[5].replaceChildren(save, cancel);
+  row.onkeydown = (event) => { if (event.key === "Enter") save.click(); };
+  z.focus();
 }
 
 $("program-upload").onchange = async (event) => {
