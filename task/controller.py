@@ -530,6 +530,11 @@ class Task:
                 pass  # offsets are task's: EMC_STAT shows them from the interpreter's parameters
             elif isinstance(msg, emc.EMC_TRAJ_SET_ROTATION):
                 self.stat.task.rotation_xy = msg.rotation
+            elif isinstance(msg, emc.EMC_TRAJ_SET_OFFSET):
+                if self.stat.motion.traj.queueFull or self._send_motion(msg):
+                    return
+                # the applied tool length offset (G43/G49), in step with the program
+                self.stat.task.toolOffset = msg.offset
             elif isinstance(msg, emc.EMC_SYSTEM_CMD):
                 if not self._is_everything_done() or not self._start_system_command(msg):
                     return
@@ -714,7 +719,6 @@ class Task:
         _store(task.g5x_offset, params[base : base + 9])
         task.g5x_index = system
         _store(task.g92_offset, params[5211:5220])
-        _store(task.toolOffset, params[5401:5410])
         task.ini_filename = self.ini.path[:255]
         try:
             self.nml[EMC_STATUS].write(self.stat)

@@ -68,3 +68,16 @@ def test_the_interpreter_sees_tool_table_edits_from_g10_and_from_the_file(start_
     machine.until(lambda s: s.tool_table[1].zoffset == pytest.approx(3.25))
     mdi(machine, "G43 H1")
     assert s.tool_offset[2] == pytest.approx(3.25)
+
+
+def test_tool_offset_shows_the_applied_offset_g43_h_and_g49(start_machine) -> None:
+    """stat.tool_offset is the offset in effect (G43 Hn with any tool, G49), not the
+    table entry of the tool in the spindle."""
+    machine = start_machine()
+    s = machine.stat
+    mdi(machine, "G43 H2 G0 X1")
+    assert s.tool_in_spindle == 0 and s.tool_offset[2] == pytest.approx(20.0)
+    mdi(machine, "G43 H1")
+    assert s.tool_offset[2] == pytest.approx(10.0)
+    mdi(machine, "G49")
+    assert s.tool_offset[2] == 0.0
