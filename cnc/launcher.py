@@ -27,7 +27,13 @@ import time
 from pathlib import Path
 
 from cnc.ini import IniError, IniFile
-from cnc.runtime import read_runtime_info, remove_runtime_info, write_runtime_info
+from cnc.runtime import (
+    claim_instance,
+    read_runtime_info,
+    release_instance,
+    remove_runtime_info,
+    write_runtime_info,
+)
 from nml.channels import DEFAULT_NML_FILE, EMC_STATUS, Nml, load_config
 from nml.config import NmlConfig
 from nml.errors import NmlError
@@ -57,15 +63,17 @@ class Launcher:
         self.hal_session = None
         self.is_owner = False
         self.is_stopping = False
+        self.instance_lock: int | None = None
 
     # ------------------------------------------------------------------ start-up
     def start(self) -> None:
-        running = read_runtime_info()
-        if running is not None:  # not ours: stop() must leave it alone
+        self.instance_lock = claim_instance()
+        if self.instance_lock is None:  # not ours: stop() must leave it alone
+            running = read_runtime_info()
+            which = f" (pid {running.pid}, {running.ini})" if running else " (starting up)"
             raise LaunchError(
-                f"a machine is already running for instance '{current_instance()}' "
-                f"(pid {running.pid}, {running.ini}): stop it first, or set "
-                f"{INSTANCE_ENV} to run another one"
+                f"a machine is already running for instance '{current_instance()}'{which}: "
+                f"stop it first, or set {INSTANCE_ENV} to run another one"
             )
         self.is_owner = True  # from here on this instance is ours to clean up
         leftovers = remove_instance_objects()
@@ -108,10 +116,13 @@ class Launcher:
             self._halcmd(*shlex.split(line))
         self._halcmd("start")  # the threads run from now on, as LinuxCNC starts them here
         self._start_task()
-        write_runtime_info(self.ini_path, nml_file)
         self._start_display()
-        for hal_file in self.ini.findall("HAL", "POSTGUI_HALFILE"):
+        postgui_files = self.ini.findall("HAL", "POSTGUI_HALFILE")
+        if postgui_files:
+            self._wait_for_display_pins()
+        for hal_file in postgui_files:
             self._run_hal_file(hal_file)
+        write_runtime_info(self.ini_path, nml_file)  # scripts find it from now on
         say(f"machine ready ({self.ini_path})")
 
     def _nml_file(self) -> str:
@@ -209,6 +220,25 @@ class Launcher:
         except OSError as exc:
             raise LaunchError(f"cannot start [DISPLAY]DISPLAY = {display}: {exc}") from None
 
+    def _wait_for_display_pins(self) -> None:
+        """Before POSTGUI_HALFILE: the display's own HAL component must exist, as LinuxCNC's
+        GUIs run that file only once their pins are made (ours: ``web`` makes one for its
+        [DISPLAY] MESSAGE_PINNAME / MULTIMESSAGE_ID dialogs)."""
+        display = shlex.split(self.ini.find("DISPLAY", "DISPLAY") or "") or [""]
+        has_messages = self.ini.find("DISPLAY", "MESSAGE_PINNAME") or self.ini.find(
+            "DISPLAY", "MULTIMESSAGE_ID"
+        )
+        if self.display is None or display[0] != "web" or not has_messages:
+            return
+        hal = self._hal().hal
+        deadline = time.monotonic() + READY_TIMEOUT_S
+        while not (hal.meta["comps"].get("web") or {}).get("is_ready"):
+            if self.display.poll() is not None:
+                raise LaunchError("the display exited at start-up")
+            if time.monotonic() > deadline:
+                raise LaunchError(f"the display made no HAL pins within {READY_TIMEOUT_S} s")
+            time.sleep(0.02)
+
     # ------------------------------------------------------------------ running
     def wait(self) -> int:
         """Until the display exits, a signal arrives, or task or the host dies."""
@@ -242,6 +272,9 @@ class Launcher:
         leftovers = remove_instance_objects()
         if leftovers:
             say(f"removed {len(leftovers)} shared-memory objects left by crashed processes")
+        if self.instance_lock is not None:
+            release_instance(self.instance_lock)
+            self.instance_lock = None
         say("stopped")
 
 

@@ -1,7 +1,8 @@
 """Where a running controller can be found: the runtime-info file.
 
-The launcher calls ``write_runtime_info(ini, nml)`` once its buffers exist and
-``remove_runtime_info()`` when it shuts down. The file is
+The launcher holds the instance's lock (``claim_instance``) from its first step to its
+last, calls ``write_runtime_info(ini, nml)`` once the machine is ready (HAL files, task,
+display and POSTGUI files done) and ``remove_runtime_info()`` when it shuts down. The file is
 ``${XDG_RUNTIME_DIR:-/tmp}/cnc-<instance>.json`` (instance: ``$CNC_INSTANCE``, default
 ``main``), written atomically, e.g.::
 
@@ -16,6 +17,7 @@ and ignored.
 from __future__ import annotations
 
 import contextlib
+import fcntl
 import json
 import os
 from dataclasses import dataclass
@@ -66,6 +68,27 @@ def read_runtime_info(instance: str | None = None) -> RuntimeInfo | None:
     except (OSError, ValueError, KeyError, TypeError):
         return None
     return info if is_process_alive(info.pid) else None
+
+
+def claim_instance() -> int | None:
+    """Take the current instance for this process: an open file descriptor holding an
+    exclusive lock (released by the kernel when the process ends, even by kill -9), or None
+    when another process holds it (a machine is running or starting)."""
+    path = runtime_info_path().with_suffix(".lock")
+    fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o644)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        os.close(fd)
+        return None
+    return fd
+
+
+def release_instance(fd: int) -> None:
+    """Give the instance back (after shutting down); the lock file goes too."""
+    with contextlib.suppress(OSError):
+        runtime_info_path().with_suffix(".lock").unlink()
+    os.close(fd)
 
 
 def remove_runtime_info() -> None:

@@ -471,3 +471,20 @@ def test_a_killed_launcher_takes_its_machine_down_with_it(procs, tmp_path: Path)
         time.sleep(0.05)
     # what they left in shared memory is removed by the next launch (see the restart test)
     remove_instance_objects()
+
+
+def test_a_launch_while_another_one_starts_up_is_refused(procs, tmp_path: Path) -> None:
+    """The instance is claimed (a kernel lock) before anything is made, so a second launch
+    never removes the buffers of a machine still starting up."""
+    from cnc.runtime import claim_instance, release_instance
+
+    folder = tmp_path / "machine"
+    shutil.copytree(MACHINE, folder)
+    lock = claim_instance()  # as a launcher that has not finished starting holds it
+    assert lock is not None and claim_instance() is None
+    try:
+        second = procs.python("-m", "cnc", "run", "--headless", "mill.ini", cwd=folder)
+        assert second.wait(timeout=30) == 1
+        assert "already running for instance" in second.stderr.read()
+    finally:
+        release_instance(lock)
