@@ -8,6 +8,12 @@ trajectory planner and the kinematics, and follows LinuxCNC's position flow (MOT
     free:   per-joint planners -> joint pos_cmd -> forward kinematics -> carte_pos_cmd
     both:   motor_pos_cmd = pos_cmd + motor_offset;  pos_fb = motor_pos_fb - motor_offset
 
+Spindles (MOT-065): motion drives the ``spindle.N.*`` pins (speed, direction, CSS from
+the X position, M19 orientation) and reads their feedback each period; the planner gets
+the revolutions, speed and at-speed of the spindle synchronised moves follow (G33, G33.1,
+G95), and the index handshake (``spindle.N.index-enable``) starts a G33 chain. MPG wheels
+(``joint.N.jog-*``, ``axis.L.jog-*``) jog in free and teleop mode.
+
 Commands are NML messages (``nml.emc``); ``handle(cmd)`` returns ``None`` when the command
 was carried out, or the reason it was refused (MOT-019: where LinuxCNC ignores a command
 silently, we refuse it and say why). Faults found during a period (following error, hard
@@ -16,6 +22,8 @@ limits, planner errors) are queued in ``errors`` for the caller to report.
 
 from __future__ import annotations
 
+import contextlib
+import enum
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -42,15 +50,75 @@ _TERM_CONDS = {
 DEFAULT_JOINT_VEL = 1.0
 DEFAULT_JOINT_ACC = 1.0
 NO_HOME_SEQUENCE = 999  # what task sends for a joint without HOME_SEQUENCE (as LinuxCNC)
+AT_SPEED_SETTLE_PERIODS = 2  # see Spindle.settle_periods
+
+
+class OrientState(enum.IntEnum):
+    """EMC_SPINDLE_STAT.orient_state (LinuxCNC's EMCMOT_ORIENT_*)."""
+
+    NONE = 0
+    IN_PROGRESS = 1
+    COMPLETE = 2
+    FAULTED = 3
 
 
 @dataclass
 class Spindle:
-    speed: float = 0.0  # signed rpm commanded (negative: reverse)
+    """One spindle as motion drives it (the ``spindle.N.*`` pins, MOT-065)."""
+
+    speed: float = 0.0  # signed rpm commanded (negative: reverse); in CSS the maximum
     scale: float = 1.0
+    css_factor: float = 0.0  # G96: rpm = css_factor / radius (signed); 0: fixed speed
+    css_xoffset: float = 0.0  # machine X of the spindle axis (G5x + G92 + tool offsets)
+    increasing: int = 0  # 1 after EMC_SPINDLE_INCREASE, -1 after DECREASE
     is_brake_on: bool = True
     is_override_enabled: bool = True
-    orient_state: int = 0
+    # M19: the orient pins and the cycle's state
+    is_orienting: bool = False
+    orient_angle: float = 0.0
+    orient_mode: int = 0
+    is_locked: bool = False
+    orient_state: OrientState = OrientState.NONE
+    orient_fault: int = 0
+    # per period: speed output, index handshake and the feedback seen
+    speed_out: float = 0.0  # rpm to the drive, after CSS, override, inhibit, rigid tap
+    is_index_enabled: bool = False
+    is_at_speed: bool = True
+    is_inhibited: bool = False
+    # periods during which at-speed is taken as false after a speed change: the pin
+    # still tells about the old speed until the drive has seen the new one
+    settle_periods: int = 0
+
+    def stop_orienting(self) -> None:
+        """M3, M4, M5 end any orient cycle and unlock the spindle."""
+        self.is_orienting = self.is_locked = False
+        self.orient_state = OrientState.NONE
+        self.orient_fault = 0
+
+
+@dataclass
+class SpindleInputs:
+    """HAL inputs of one spindle for one period (``spindle.N.*``)."""
+
+    revs: float = 0.0  # encoder position in revolutions, reset to 0 at the index
+    speed_in: float = 0.0  # measured revolutions per second
+    is_at_speed: bool = True
+    index_enable: bool = False  # cleared by the encoder at the index
+    is_oriented: bool = False
+    orient_fault: int = 0
+    is_inhibited: bool = False
+    is_amp_fault: bool = False
+
+
+@dataclass
+class WheelInputs:
+    """An MPG wheel on ``joint.N.jog-*`` or ``axis.L.jog-*`` (motion(9))."""
+
+    counts: int = 0
+    is_enabled: bool = False
+    scale: float = 0.0  # machine units per count
+    is_vel_mode: bool = False
+    accel_fraction: float = 1.0
 
 
 @dataclass
@@ -67,6 +135,12 @@ class Inputs:
     enable: bool = True  # motion.enable
     digital_in: list[bool] = field(default_factory=list)
     analog_in: list[float] = field(default_factory=list)
+    spindles: list[SpindleInputs] = field(default_factory=list)
+    joint_wheels: list[WheelInputs] = field(default_factory=list)  # one per joint
+    is_jog_inhibited: bool = False  # motion.jog-inhibit
+    is_jog_stop: bool = False  # motion.jog-stop: stop jogs at the acceleration limit
+    is_jog_stop_immediate: bool = False  # motion.jog-stop-immediate
+    axis_wheels: dict[int, WheelInputs] = field(default_factory=dict)  # axis index -> wheel
 
 
 class MotionController:
@@ -126,6 +200,12 @@ class MotionController:
         self.is_feed_hold_enabled = True
         self.is_adaptive_feed_enabled = False
         self.errors: list[str] = []
+        self.sync_spindle = 0  # the spindle synchronised moves follow (SET_SPINDLESYNC)
+        self._wheel_counts: dict[tuple[str, int], int] = {}  # last jog-counts seen
+        self.is_jog_inhibited = False
+        self._jog_stops = (False, False)  # jog-stop, jog-stop-immediate last period
+        self._orient_wait: tuple[int, float] | None = None  # (spindle, seconds left)
+        self._is_last_move_rapid = True
         self._pending_douts: list[tuple[int, bool]] = []
         self._pending_aouts: list[tuple[int, float]] = []
 
@@ -165,6 +245,7 @@ class MotionController:
 
     def _stop_everything_now(self) -> None:
         self.homing.abort()
+        self._orient_wait = None
         for joint in self.joints:
             joint.planner.reset(joint.pos_cmd)
         self.tp.set_position(list(self.carte_pos_cmd))
@@ -175,6 +256,7 @@ class MotionController:
         for planner in [*(j.planner for j in self.joints), *self.axis_planners]:
             planner.stop()
         self.tp.abort()
+        self._orient_wait = None
         return None
 
     def _set_mode(self, cmd: emc.EMC_TRAJ_SET_MODE) -> str | None:
@@ -201,6 +283,7 @@ class MotionController:
     def _is_moving(self) -> bool:
         return (
             not self.tp.is_done
+            or self._orient_wait is not None
             or self.homing.is_homing
             or any(j.planner.is_active for j in self.joints)
             or any(p.is_active for p in self.axis_planners)
@@ -213,6 +296,8 @@ class MotionController:
             return "cannot jog with motion disabled"
         if self.homing.is_homing:
             return "cannot jog while homing"
+        if self.is_jog_inhibited and not isinstance(cmd, emc.EMC_JOG_STOP):
+            return "jogging is inhibited (motion.jog-inhibit)"
         index = cmd.joint_or_axis
         if cmd.jjogmode == emc.JOG_MODE.JOINT:
             if self.mode != FREE:
@@ -284,6 +369,7 @@ class MotionController:
         problem = self._require_coord() or self._check_soft_limits(_pose(cmd.end), "Linear move")
         if problem:
             return problem
+        self._note_move_type(cmd.type == emc.EMC_MOTION_TYPE.TRAVERSE)
         self.tp.add_line(
             list(_pose(cmd.end)),
             cmd.vel,
@@ -301,6 +387,7 @@ class MotionController:
         problem = self._require_coord() or self._check_soft_limits(_pose(cmd.end), "Circular move")
         if problem:
             return problem
+        self._note_move_type(is_rapid=False)
         # LinuxCNC's turn: n >= 0 counter-clockwise about the normal plus n full turns;
         # -1, -2 ... clockwise (one arc, plus -turn - 1 full turns): the other way round
         normal = (cmd.normal.x, cmd.normal.y, cmd.normal.z)
@@ -322,6 +409,13 @@ class MotionController:
         )
         self._flush_synchronised_outputs()
         return None
+
+    def _note_move_type(self, is_rapid: bool) -> None:
+        """In CSS mode a feed after a rapid waits for the spindle's new speed (motion(9))."""
+        is_css = any(s.css_factor for s in self.spindles)
+        if is_css and self._is_last_move_rapid and not is_rapid:
+            self.tp.wait_for_spindle_at_speed()
+        self._is_last_move_rapid = is_rapid
 
     def _probe(self, cmd: emc.EMC_TRAJ_PROBE) -> str | None:
         problem = self._require_coord() or self._check_soft_limits(_pose(cmd.pos), "Probe move")
@@ -544,27 +638,55 @@ class MotionController:
         return None
 
     def _spindle(self, cmd: emc.NMLmsg) -> str | None:
+        """M3/M4/M5, S, brake, M19 and its wait (MOT-065; ``spindle.N.*`` pins)."""
         if not 0 <= cmd.spindle < len(self.spindles):
             return f"spindle {cmd.spindle} does not exist (num_spindles {len(self.spindles)})"
         spindle = self.spindles[cmd.spindle]
+        spindle.increasing = 0
+        spindle.settle_periods = AT_SPEED_SETTLE_PERIODS
         if isinstance(cmd, emc.EMC_SPINDLE_ON):
+            spindle.stop_orienting()
             spindle.speed = cmd.speed
+            spindle.css_factor, spindle.css_xoffset = cmd.factor, cmd.xoffset
             spindle.is_brake_on = False
+            if cmd.wait_for_spindle_at_speed:
+                self.tp.wait_for_spindle_at_speed()
         elif isinstance(cmd, emc.EMC_SPINDLE_OFF):
-            spindle.speed = 0.0
+            spindle.stop_orienting()
+            spindle.speed = spindle.css_factor = 0.0
             spindle.is_brake_on = True
         elif isinstance(cmd, emc.EMC_SPINDLE_SPEED):
             sign = -1.0 if spindle.speed < 0 else 1.0
             spindle.speed = sign * abs(cmd.speed) if spindle.speed else 0.0
+            spindle.css_factor = math.copysign(cmd.factor, sign) if spindle.speed else 0.0
+            spindle.css_xoffset = cmd.xoffset
+            if spindle.speed:  # feed moves wait for the new speed (motion(9) at-speed)
+                self.tp.wait_for_spindle_at_speed()
         elif isinstance(cmd, emc.EMC_SPINDLE_INCREASE | emc.EMC_SPINDLE_DECREASE):
             step = abs(cmd.speed) or 100.0
+            spindle.increasing = 1
             if isinstance(cmd, emc.EMC_SPINDLE_DECREASE):
                 step = -min(step, abs(spindle.speed))
+                spindle.increasing = -1
             spindle.speed += step if spindle.speed >= 0 else -step
         elif isinstance(cmd, emc.EMC_SPINDLE_BRAKE_ENGAGE):
             spindle.is_brake_on = True
         elif isinstance(cmd, emc.EMC_SPINDLE_BRAKE_RELEASE):
             spindle.is_brake_on = False
+        elif isinstance(cmd, emc.EMC_SPINDLE_ORIENT):
+            # M19: stop, then the drive turns to the angle and answers on is-oriented
+            spindle.speed = spindle.css_factor = 0.0
+            spindle.is_brake_on = spindle.is_locked = False
+            spindle.is_orienting = True
+            spindle.orient_angle, spindle.orient_mode = cmd.orientation, cmd.mode
+            spindle.orient_state, spindle.orient_fault = OrientState.IN_PROGRESS, 0
+        elif isinstance(cmd, emc.EMC_SPINDLE_WAIT_ORIENT_COMPLETE):
+            # the moves after it wait; inpos stays false until it completes (task waits)
+            if spindle.orient_state == OrientState.FAULTED:
+                return f"spindle {cmd.spindle} orient fault {spindle.orient_fault}"
+            timeout = cmd.timeout if cmd.timeout > 0 else math.inf
+            if spindle.orient_state == OrientState.IN_PROGRESS:
+                self._orient_wait = (cmd.spindle, timeout)
         return None
 
     def _settings(self, cmd: emc.NMLmsg) -> str | None:
@@ -584,12 +706,28 @@ class MotionController:
         return None
 
     def _spindle_sync(self, cmd: emc.EMC_TRAJ_SET_SPINDLESYNC) -> str | None:
-        """Spindle-synchronised motion (G33, G76, G95): the planner has no support yet."""
+        """G33, G76, G95: the moves queued next follow the spindle (MOT-062, MOT-065)."""
+        if not 0 <= cmd.spindle < len(self.spindles):
+            return f"spindle {cmd.spindle} does not exist (num_spindles {len(self.spindles)})"
+        self.tp.set_spindle_sync(cmd.feed_per_revolution, bool(cmd.velocity_mode))
         if cmd.feed_per_revolution:
-            return (
-                "spindle-synchronised motion (G33, G76, G95 feed per revolution) "
-                "is not supported yet"
-            )
+            self.sync_spindle = cmd.spindle
+        return None
+
+    def _rigid_tap(self, cmd: emc.EMC_TRAJ_RIGID_TAP) -> str | None:
+        """G33.1: in following the spindle, spindle reversed, out again (MOT-062)."""
+        end = _pose(cmd.pos)
+        problem = self._require_coord() or self._check_soft_limits(end, "Rigid tap move")
+        if problem:
+            return problem
+        self.tp.add_rigid_tap(
+            list(end),
+            cmd.ini_maxvel,
+            cmd.acc,
+            motion_id=self.next_motion_id,
+            retract_scale=cmd.scale if cmd.scale > 0 else 1.0,
+        )
+        self._is_last_move_rapid = False
         return None
 
     def _spindle_scale(self, cmd: emc.EMC_TRAJ_SET_SPINDLE_SCALE) -> str | None:
@@ -615,6 +753,8 @@ class MotionController:
         if self.is_enabled and not inputs.enable:
             self._fault("motion disabled by the motion.enable pin")
         self._check_hard_limits_and_faults(inputs)
+        self._read_spindles(inputs.spindles)
+        self._jog_wheels(inputs)
         if self.mode == COORD:
             self.tp.probe_input = inputs.probe
             position = self.tp.step()
@@ -637,6 +777,133 @@ class MotionController:
             self.carte_pos_cmd = self._forward([j.pos_cmd for j in self.joints])
         self.carte_pos_fb = self._forward([j.pos_fb for j in self.joints])
         self._check_following_error()
+        self._drive_spindles()
+
+    # ---------------------------------------------------------------- jog wheels
+    def _jog_wheels(self, inputs: Inputs) -> None:
+        """MPG wheels: each count moves the joint (free mode) or the axis (teleop mode) by
+        jog-scale within its limits; counts that arrive while a wheel cannot jog are
+        dropped, as LinuxCNC does (motion(9) jog pins)."""
+        self.is_jog_inhibited = inputs.is_jog_inhibited
+        self._stop_jogs_on_request(inputs.is_jog_stop, inputs.is_jog_stop_immediate)
+        can_jog = self.is_enabled and not self.homing.is_homing and not self.is_jog_inhibited
+        for index, wheel in enumerate(inputs.joint_wheels):
+            delta = self._wheel_delta(("joint", index), wheel)
+            if delta and can_jog and self.mode == FREE:
+                joint = self.joints[index]
+                override = self.is_override_limits or not joint.is_homed
+                self._wheel_jog(joint.planner, delta * wheel.scale, wheel, override)
+        for index, wheel in inputs.axis_wheels.items():
+            delta = self._wheel_delta(("axis", index), wheel)
+            if delta and can_jog and self.mode == TELEOP:
+                planner = self.axis_planners[index]
+                self._wheel_jog(planner, delta * wheel.scale, wheel, self.is_override_limits)
+
+    def _stop_jogs_on_request(self, is_stop: bool, is_stop_immediate: bool) -> None:
+        """motion.jog-stop / jog-stop-immediate: a rising edge stops the jogs running,
+        braking or at once."""
+        was_stop, was_stop_immediate = self._jog_stops
+        self._jog_stops = (is_stop, is_stop_immediate)
+        if self.homing.is_homing or self.mode == COORD:
+            return
+        planners = [j.planner for j in self.joints] if self.mode == FREE else self.axis_planners
+        if is_stop_immediate and not was_stop_immediate:
+            for planner in planners:
+                planner.reset(planner.pos)
+        elif is_stop and not was_stop:
+            for planner in planners:
+                planner.stop()
+
+    @property
+    def is_jogging(self) -> bool:
+        """motion.jog-is-active: a joint (free mode) or an axis (teleop mode) jogs."""
+        if self.mode == FREE and not self.homing.is_homing:
+            return any(j.planner.is_active for j in self.joints)
+        return self.mode == TELEOP and any(p.is_active for p in self.axis_planners)
+
+    def _wheel_delta(self, key: tuple[str, int], wheel: WheelInputs) -> int:
+        last = self._wheel_counts.get(key, wheel.counts)
+        self._wheel_counts[key] = wheel.counts
+        return wheel.counts - last if wheel.is_enabled else 0
+
+    @staticmethod
+    def _wheel_jog(planner: FreePlanner, offset: float, wheel: WheelInputs, override: bool) -> None:
+        # at a limit, or a bad scale: the wheel does nothing, as in LinuxCNC
+        with contextlib.suppress(JogLimitError, ValueError):
+            planner.jog_wheel(offset, wheel.accel_fraction, wheel.is_vel_mode, override)
+
+    # ---------------------------------------------------------------- spindle, per period
+    def _read_spindles(self, inputs: list[SpindleInputs]) -> None:
+        """Spindle feedback: orient cycle, index handshake, the planner's spindle inputs."""
+        for index, (spindle, pins) in enumerate(zip(self.spindles, inputs, strict=False)):
+            spindle.is_at_speed = pins.is_at_speed and not spindle.settle_periods
+            spindle.settle_periods = max(spindle.settle_periods - 1, 0)
+            spindle.is_inhibited = pins.is_inhibited
+            if pins.is_amp_fault and self.is_enabled:
+                self._fault(f"spindle {index} amplifier fault")
+            if spindle.is_orienting:
+                if pins.orient_fault:
+                    spindle.is_orienting = False
+                    spindle.orient_state = OrientState.FAULTED
+                    spindle.orient_fault = pins.orient_fault
+                    self.errors.append(f"spindle {index} orient fault {pins.orient_fault}")
+                elif pins.is_oriented:  # done: the spindle is held at the angle
+                    spindle.is_orienting = False
+                    spindle.is_locked = spindle.is_brake_on = True
+                    spindle.orient_state = OrientState.COMPLETE
+        self._check_orient_wait()
+        tp = self.tp
+        tp.is_start_held = self._orient_wait is not None
+        if not inputs:
+            return
+        sync = self.spindles[self.sync_spindle]
+        pins = inputs[self.sync_spindle]
+        if not tp.is_waiting_for_index:
+            sync.is_index_enabled = False  # (also when an abort ended the wait)
+        elif sync.is_index_enabled and not pins.index_enable:  # the encoder saw the index
+            sync.is_index_enabled = False
+            tp.index_found()
+        else:
+            sync.is_index_enabled = True
+        # revolutions counted in the programmed direction (a rigid tap's reversal excluded)
+        direction = -1.0 if sync.speed < 0 else 1.0
+        tp.spindle_revs = pins.revs * direction
+        tp.spindle_rps = abs(pins.speed_in)
+        tp.is_spindle_at_speed = all(
+            s.is_at_speed for s in self.spindles if s.speed or s.css_factor
+        )
+
+    def _check_orient_wait(self) -> None:
+        """EMC_SPINDLE_WAIT_ORIENT_COMPLETE: done, faulted (run aborted) or timed out."""
+        if self._orient_wait is None:
+            return
+        index, seconds_left = self._orient_wait
+        state = self.spindles[index].orient_state
+        if state == OrientState.IN_PROGRESS and seconds_left > 0:
+            self._orient_wait = (index, seconds_left - self.period_s)
+            return
+        self._orient_wait = None
+        if state == OrientState.IN_PROGRESS:
+            self.errors.append(f"spindle {index} orient timed out")
+        if state != OrientState.COMPLETE:
+            self.tp.abort()
+
+    def _drive_spindles(self) -> None:
+        """The speed each spindle is told: fixed or from the radius (G96 CSS), times the
+        override, reversed by a rigid tap, 0 while inhibited or orienting."""
+        x = self.carte_pos_cmd.x
+        for index, spindle in enumerate(self.spindles):
+            rpm = spindle.speed
+            if spindle.css_factor:
+                radius = abs(x - spindle.css_xoffset)
+                css_rpm = abs(spindle.css_factor) / radius if radius > 0 else math.inf
+                rpm = math.copysign(min(css_rpm, abs(spindle.speed)), spindle.css_factor)
+            rpm *= spindle.scale
+            if index == self.sync_spindle:
+                rpm *= self.tp.spindle_reversal
+            if spindle.is_orienting or spindle.is_inhibited:
+                rpm = 0.0
+            spindle.speed_out = rpm
 
     def _set_joints_from_pose(self, pose: EmcPose) -> None:
         try:
@@ -681,6 +948,18 @@ class MotionController:
     def is_in_position(self) -> bool:
         return not self._is_moving()
 
+    @property
+    def current_vel(self) -> float:
+        """Path speed: the planner's in coord mode, the teleop vector's length in teleop
+        mode (XYZ, else the other axes), 0 in free mode (as LinuxCNC's current_vel)."""
+        if self.mode == COORD:
+            return self.tp.vel
+        if self.mode == TELEOP:
+            speeds = [p.vel for p in self.axis_planners]
+            xyz = math.hypot(*speeds[:3])
+            return xyz or math.hypot(*speeds[3:])
+        return 0.0
+
     def fill_status(self, stat: emc.EMC_MOTION_STAT) -> None:
         """Write the controller's state into an EMC_MOTION_STAT (MOT-066..071)."""
         traj = stat.traj
@@ -706,9 +985,12 @@ class MotionController:
         _store_pose(traj.probedPosition, EmcPose(*self.tp.probe_pos.tolist()))
         traj.probe_tripped = self.tp.probe_tripped
         traj.kinematics_type = int(self.kins.kinematics_type())
-        traj.distance_to_go = self.tp.distance_to_go if self.mode == COORD else 0.0
-        traj.current_vel = self.tp.vel if self.mode == COORD else 0.0
-        move = self.tp.current_move if self.mode == COORD else None
+        is_coord = self.mode == COORD
+        traj.distance_to_go = self.tp.distance_to_go if is_coord else 0.0
+        _store_pose(traj.dtg, EmcPose(*self.tp.dtg.tolist()) if is_coord else EmcPose())
+        traj.current_vel = self.current_vel
+        traj.activeQueue = self.tp.active_queue if is_coord else 0
+        move = self.tp.current_move if is_coord else None
         traj.motion_type = _motion_type(move)
         traj.probing = move is not None and move.probe is not None
         traj.feed_override_enabled = self.is_feed_override_enabled
@@ -732,10 +1014,16 @@ class MotionController:
         for spindle, out in zip(self.spindles, stat.spindle, strict=False):
             out.speed = spindle.speed
             out.spindle_scale = spindle.scale
+            out.css_maximum = abs(spindle.speed) if spindle.css_factor else 0.0
+            out.css_factor = spindle.css_factor
             out.direction = (spindle.speed > 0) - (spindle.speed < 0)
             out.brake = spindle.is_brake_on
-            out.enabled = spindle.speed != 0
+            out.enabled = out.state = spindle.speed != 0
+            out.increasing = spindle.increasing
+            out.orient_state = spindle.orient_state
+            out.orient_fault = spindle.orient_fault
             out.spindle_override_enabled = spindle.is_override_enabled
+            out.homed = False  # spindles are not homed (LinuxCNC reports the same)
         stat.synch_do[: len(self.digital_out)] = self.digital_out
         stat.synch_di[: len(self.digital_in)] = self.digital_in
         stat.analog_output[: len(self.analog_out)] = self.analog_out
@@ -750,7 +1038,8 @@ def _motion_type(move) -> int:
         return emc.EMC_MOTION_TYPE.PROBING
     if move.is_rapid:
         return emc.EMC_MOTION_TYPE.TRAVERSE
-    return emc.EMC_MOTION_TYPE.FEED if move.line is not None else emc.EMC_MOTION_TYPE.ARC
+    is_straight = move.line is not None or move.rigid_tap is not None
+    return emc.EMC_MOTION_TYPE.FEED if is_straight else emc.EMC_MOTION_TYPE.ARC
 
 
 def _pose(pose: emc.EmcPose) -> EmcPose:
@@ -819,6 +1108,9 @@ _HANDLERS: dict[type, Callable[[MotionController, emc.NMLmsg], str | None]] = {
     emc.EMC_SPINDLE_INCREASE: MotionController._spindle,
     emc.EMC_SPINDLE_DECREASE: MotionController._spindle,
     emc.EMC_TRAJ_SET_SPINDLESYNC: MotionController._spindle_sync,
+    emc.EMC_TRAJ_RIGID_TAP: MotionController._rigid_tap,
+    emc.EMC_SPINDLE_ORIENT: MotionController._spindle,
+    emc.EMC_SPINDLE_WAIT_ORIENT_COMPLETE: MotionController._spindle,
     emc.EMC_TRAJ_SET_OFFSET: MotionController._settings,
     emc.EMC_TRAJ_SET_FO_ENABLE: MotionController._settings,
     emc.EMC_TRAJ_SET_SO_ENABLE: MotionController._settings,

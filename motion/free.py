@@ -64,6 +64,7 @@ class FreePlanner:
         self.vel = 0.0
         self.target = self.pos
         self.vel_limit = self.max_vel
+        self.acc_fraction = 1.0  # of max_acc; a wheel jog may ask for less
         self.scale = 1.0
         self.is_enabled = False  # planning on; set by a move, cleared when it ends
         self.is_stopping = False
@@ -97,6 +98,7 @@ class FreePlanner:
         """Plan to ``target`` at speed ``vel`` (no limit check; see the jog methods)."""
         self.target = check_finite("target", target)
         self.vel_limit = min(check_positive("velocity", vel), self.max_vel)
+        self.acc_fraction = 1.0
         self.is_stopping = False
         self.is_enabled = True
 
@@ -128,6 +130,27 @@ class FreePlanner:
         """Jog to an absolute joint position; a new one replaces the target (MOT-051)."""
         self._jog_to(check_finite("jog position", position), vel, is_override_limits)
 
+    def jog_wheel(
+        self,
+        offset: float,
+        acc_fraction: float,
+        is_vel_mode: bool,
+        is_override_limits: bool = False,
+    ) -> None:
+        """An MPG wheel turned by ``offset`` (jog-counts * jog-scale): move that much more at
+        the velocity limit and ``acc_fraction`` of the acceleration limit. In velocity
+        mode the target stays within braking distance, so the joint stops soon after the
+        wheel does, even if the counts are not all travelled (motion(9) jog-vel-mode)."""
+        base = self.target if self.is_enabled and not self.is_stopping else self.pos
+        target = base + check_finite("wheel jog", offset)
+        if not 0.0 < acc_fraction <= 1.0:
+            acc_fraction = 1.0  # as LinuxCNC: other values are ignored
+        if is_vel_mode:
+            reach = self.max_vel * self.max_vel / (2.0 * self.max_acc * acc_fraction)
+            target = min(max(target, self.pos - reach), self.pos + reach)
+        self._jog_to(target, self.max_vel, is_override_limits)
+        self.acc_fraction = acc_fraction
+
     def _jog_to(self, target: float, vel: float, is_override_limits: bool) -> None:
         if not is_override_limits:
             if target != self.pos:
@@ -151,7 +174,7 @@ class FreePlanner:
         if not self.is_enabled:
             self.vel = 0.0
             return self.pos
-        acc = self.max_acc
+        acc = self.max_acc * self.acc_fraction
         adt = acc * dt
         v = self.vel
         if self.is_stopping:

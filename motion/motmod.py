@@ -26,7 +26,14 @@ from typing import Any
 
 from hal.api import RtComponent, pin
 from hal.core import HalError
-from motion.controller import COORD, TELEOP, Inputs, MotionController
+from motion.controller import (
+    COORD,
+    TELEOP,
+    Inputs,
+    MotionController,
+    SpindleInputs,
+    WheelInputs,
+)
 from motion.homing import load_homing
 from motion.kinematics import KinematicsError, load_kinematics
 from motion.modules import ModuleInterfaceError
@@ -50,6 +57,10 @@ class MotionPins(RtComponent):
     teleop_mode = pin("bit out")
     on_soft_limit = pin("bit out")
     program_line = pin("s32 out")
+    jog_inhibit = pin("bit in")
+    jog_stop = pin("bit in")
+    jog_stop_immediate = pin("bit in")
+    jog_is_active = pin("bit out")
     current_vel = pin("float out")
     distance_to_go = pin("float out")
     digital_out = pin("bit out", "digital-out-{:02d}", count="num_dio")
@@ -79,23 +90,49 @@ class JointPins(RtComponent):
     pos_lim_sw_in = pin("bit in")
     neg_lim_sw_in = pin("bit in")
     index_enable = pin("bit io")
+    # MPG wheel (free mode)
+    jog_counts = pin("s32 in")
+    jog_enable = pin("bit in")
+    jog_scale = pin("float in")
+    jog_vel_mode = pin("bit in")
+    jog_accel_fraction = pin("float in", default=1.0)
 
 
 class AxisPins(RtComponent):
     pos_cmd = pin("float out")
     teleop_pos_cmd = pin("float out")
+    # MPG wheel (teleop mode)
+    jog_counts = pin("s32 in")
+    jog_enable = pin("bit in")
+    jog_scale = pin("float in")
+    jog_vel_mode = pin("bit in")
+    jog_accel_fraction = pin("float in", default=1.0)
 
 
 class SpindlePins(RtComponent):
-    speed_out = pin("float out")
+    """``spindle.N.*`` as motion(9) lists them."""
+
+    speed_out = pin("float out")  # rpm, negative in reverse
     speed_out_rps = pin("float out")
     speed_out_abs = pin("float out")
+    speed_out_rps_abs = pin("float out")
+    speed_cmd_rps = pin("float out")  # the programmed speed, before override and CSS
     on = pin("bit out")
     forward = pin("bit out")
     reverse = pin("bit out")
     brake = pin("bit out")
     at_speed = pin("bit in", default=1)
-    speed_in = pin("float in")
+    speed_in = pin("float in")  # revolutions per second (G95, G96)
+    revs = pin("float in")  # encoder position in revolutions (G33, G33.1)
+    index_enable = pin("bit io")  # set by motion, cleared by the encoder at the index
+    inhibit = pin("bit in")
+    amp_fault_in = pin("bit in")
+    orient = pin("bit out")  # M19
+    orient_angle = pin("float out")
+    orient_mode = pin("bit out")
+    orient_fault = pin("s32 in")
+    is_oriented = pin("bit in")
+    locked = pin("bit out")
 
 
 class Motmod:
@@ -147,6 +184,9 @@ class Motmod:
             amp_fault=[False] * count,
             home_switch=[False] * count,
             index_enable=[False] * count,
+            spindles=[SpindleInputs() for _ in self.spindles],
+            joint_wheels=[WheelInputs() for _ in self.joints],
+            axis_wheels={index: WheelInputs() for index in self.axes},
         )
         host.add_function(comp, "motion-command-handler", self.command_handler)
         host.add_function(comp, "motion-controller", self.controller_period)
@@ -187,11 +227,25 @@ class Motmod:
             inputs.amp_fault[index] = pins.amp_fault_in
             inputs.home_switch[index] = pins.home_sw_in
             inputs.index_enable[index] = pins.index_enable
+            _read_wheel(pins, inputs.joint_wheels[index])
+        for index, pins in self.axes.items():
+            _read_wheel(pins, inputs.axis_wheels[index])
         motion_pins = self.motion
         inputs.probe = motion_pins.probe_input
         inputs.enable = motion_pins.enable
+        inputs.is_jog_inhibited = motion_pins.jog_inhibit
+        inputs.is_jog_stop = motion_pins.jog_stop
+        inputs.is_jog_stop_immediate = motion_pins.jog_stop_immediate
         inputs.digital_in = list(motion_pins.digital_in)
         inputs.analog_in = list(motion_pins.analog_in)
+        for pins, spindle, state in zip(
+            self.spindles, inputs.spindles, self.controller.spindles, strict=True
+        ):
+            spindle.revs, spindle.speed_in = pins.revs, pins.speed_in
+            spindle.is_at_speed, spindle.index_enable = pins.at_speed, pins.index_enable
+            spindle.is_inhibited, spindle.is_amp_fault = pins.inhibit, pins.amp_fault_in
+            if state.is_orienting:  # (only an orient cycle reads these)
+                spindle.is_oriented, spindle.orient_fault = pins.is_oriented, pins.orient_fault
         controller = self.controller
         controller.update(inputs)
         self._write_pins()
@@ -222,22 +276,30 @@ class Motmod:
         motion.in_position = controller.is_in_position
         motion.coord_mode = controller.mode == COORD
         motion.teleop_mode = controller.mode == TELEOP
+        motion.jog_is_active = controller.is_jogging
         motion.program_line = controller.tp.motion_id
-        motion.current_vel = controller.tp.vel
-        motion.distance_to_go = controller.tp.distance_to_go
+        motion.current_vel = controller.current_vel
+        motion.distance_to_go = controller.tp.distance_to_go if controller.mode == COORD else 0.0
         for index, value in enumerate(controller.digital_out):
             motion.digital_out[index] = value
         for index, value in enumerate(controller.analog_out):
             motion.analog_out[index] = value
         for spindle, pins in zip(controller.spindles, self.spindles, strict=True):
-            speed = spindle.speed * spindle.scale
+            speed = spindle.speed_out
             pins.speed_out = speed
             pins.speed_out_rps = speed / 60.0
             pins.speed_out_abs = abs(speed)
+            pins.speed_out_rps_abs = abs(speed) / 60.0
+            pins.speed_cmd_rps = spindle.speed / 60.0
             pins.on = speed != 0
             pins.forward = speed > 0
             pins.reverse = speed < 0
             pins.brake = spindle.is_brake_on
+            pins.index_enable = spindle.is_index_enabled
+            pins.orient = spindle.is_orienting
+            pins.orient_angle = spindle.orient_angle
+            pins.orient_mode = bool(spindle.orient_mode)
+            pins.locked = spindle.is_locked
 
     def _publish(self) -> None:
         with contextlib.suppress(NmlTimeoutError):  # busy this instant: next period publishes
@@ -249,6 +311,16 @@ class Motmod:
             except NmlTimeoutError:
                 return
             self.pending_errors.pop(0)
+
+
+def _read_wheel(pins: JointPins | AxisPins, wheel: WheelInputs) -> None:
+    """The wheel's pins; the rest only when the counts changed (all the controller uses
+    then), to keep the servo period short."""
+    counts = pins.jog_counts
+    if counts != wheel.counts:
+        wheel.is_enabled, wheel.scale = pins.jog_enable, pins.jog_scale
+        wheel.is_vel_mode, wheel.accel_fraction = pins.jog_vel_mode, pins.jog_accel_fraction
+    wheel.counts = counts
 
 
 def rtapi_app_main(host: Any, comp: str, args: dict[str, str]) -> None:

@@ -357,8 +357,16 @@ class TaskCanon:
         acc = _ratio(length, t_acc, self.setup.max_acceleration)
         return _Straight(is_linear, is_angular, vel, acc, t_vel, t_acc)
 
+    def _is_synched(self) -> bool:
+        """Whether feed moves now follow a spindle (START_SPEED_FEED_SYNCH)."""
+        return any(spindle.is_synched for spindle in self.spindles)
+
     def _feed_velocity(self, limits: _Straight) -> float:
-        """The requested velocity of a feed move: the feed rate, within the axis limits."""
+        """The requested velocity of a feed move: the feed rate, within the axis limits.
+        A spindle-synchronised move (G33, G76, G95) asks for the limit: motion takes its
+        speed from the spindle."""
+        if self._is_synched():
+            return limits.vel
         if limits.is_angular and not limits.is_linear:
             return min(limits.vel, self.angular_feed_rate)
         if limits.is_linear:
@@ -432,8 +440,7 @@ class TaskCanon:
         self._chain.clear()
         limits = self._straight(end)
         vel = self._feed_velocity(limits)
-        is_synched = self.spindles[self.spindle_num].is_synched
-        if (vel and limits.acc) or is_synched:
+        if vel and limits.acc:
             msg = emc.EMC_TRAJ_LINEAR_MOVE(
                 type=emc.EMC_MOTION_TYPE.FEED,
                 end=_pose(end),
@@ -550,7 +557,7 @@ class TaskCanon:
         v_max, a_max = self._arc_limits(
             end, (i1, i2, normal_axis), normal, (start_radius, end_radius), full_angle
         )
-        vel = min(self.linear_feed_rate, v_max)
+        vel = v_max if self._is_synched() else min(self.linear_feed_rate, v_max)
 
         if rotation == 0:
             msg: RCS_CMD_MSG = emc.EMC_TRAJ_LINEAR_MOVE(

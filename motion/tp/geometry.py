@@ -145,6 +145,9 @@ class LinePiece(Piece):
     def end(self) -> np.ndarray:
         return self.start + self.direction * self.length
 
+    def is_xyz_only(self) -> bool:
+        return np.abs(self.direction[3:]).max() <= EPS
+
     def is_single_group(self) -> bool:
         """True when the path length is the full 9-D length (only one axis group moves),
         which is when a tangent blend arc in 9-D keeps the feed meaning intact."""
@@ -172,7 +175,7 @@ class ArcPiece(Piece):
     with phi = s * k. ``e1``/``e2`` are orthonormal 9-D vectors; ``h`` carries the helix
     (motion along the normal) and the linear motion of the other axes, per radian."""
 
-    __slots__ = ("centre", "dr", "e1", "e2", "h", "k", "r0", "theta")
+    __slots__ = ("centre", "dr", "e1", "e2", "full_length", "h", "k", "r0", "theta")
 
     def __init__(
         self,
@@ -198,6 +201,7 @@ class ArcPiece(Piece):
         self.centre, self.e1, self.e2, self.h = centre, e1, e2, h
         self.r0, self.dr, self.theta = r0, dr, theta
         self.k = theta / self.length if self.length > 0 else 0.0
+        self.full_length = self.length  # before blends trimmed it
 
     def point(self, s: float) -> np.ndarray:
         phi = s * self.k
@@ -215,6 +219,29 @@ class ArcPiece(Piece):
         c, sn = math.cos(phi), math.sin(phi)
         dp = self.dr * (c * self.e1 + sn * self.e2) + r * (c * self.e2 - sn * self.e1) + self.h
         return dp * self.k
+
+    def plane_normal(self) -> np.ndarray | None:
+        """The XYZ normal of a flat circle in XYZ only (no spiral, helix or other axes),
+        the arcs a corner blend may cut into; None for any other arc."""
+        if abs(self.dr) > EPS or np.abs(self.h).max() > EPS:
+            return None
+        if np.abs(self.e1[3:]).max() > EPS or np.abs(self.e2[3:]).max() > EPS:
+            return None
+        return np.cross(self.e1[XYZ], self.e2[XYZ])
+
+    def trim_start(self, d: float) -> None:
+        """Start ``d`` further along (the end stays where it is)."""
+        phi = d * self.k
+        c, sn = math.cos(phi), math.sin(phi)
+        self.centre = self.centre + self.h * phi
+        self.e1, self.e2 = c * self.e1 + sn * self.e2, c * self.e2 - sn * self.e1
+        self.r0 += self.dr * phi
+        self.theta -= phi
+        self.length -= d
+
+    def trim_end(self, d: float) -> None:
+        self.theta -= d * self.k
+        self.length -= d
 
     def axis_bounds(self) -> tuple[np.ndarray, np.ndarray]:
         rmax = max(self.r0, self.r0 + self.dr * self.theta)

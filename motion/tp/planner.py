@@ -4,6 +4,8 @@ Moves (LINE, CIRCLE, PROBE) are queued in the cartesian frame. Each move becomes
 more path pieces (``geometry``); under G64 the corner between two lines is replaced by a
 tangent arc that stays within the P tolerance, so the path has no velocity jumps and its
 speed is limited only by the axis limits (speed cap and tangential acceleration per piece).
+Corners where an arc meets a line or another arc in one XYZ plane are blended the same way,
+the arc trimmed like a line (``_blend_curved``); other real corners are passed at rest.
 
 Lookahead: once per servo period a backward pass over the pieces queued since the last
 one raises the planned exit speeds of the pieces before them as far as braking allows
@@ -17,6 +19,15 @@ brakes onto the planned curve of the pieces this period may reach, onto feed cha
 ahead (feed differs per move and overrides change at any time) and onto requested stops
 (pause, step, abort, probe trip). Integration is trapezoidal, so the discrete braking
 distance equals the planned one and stops land exactly on their point.
+
+Spindle (MOT-065): the caller gives the spindle's state every period (``spindle_revs``,
+``spindle_rps``, ``is_spindle_at_speed``). A move queued after a spindle start waits at
+its start until the spindle is at speed. Moves queued under ``set_spindle_sync`` follow
+the spindle: in velocity mode (G95) their feed is ``feed_per_rev * spindle_rps``; in
+position mode (G33) their path position follows the revolutions at ``feed_per_rev`` per
+revolution, the first move of a chain waiting at rest for the encoder's index pulse
+(``is_waiting_for_index``, then ``index_found``). Rigid tapping (G33.1, ``add_rigid_tap``)
+is a move of its own, run by ``motion.tp.spindlesync``.
 """
 
 from __future__ import annotations
@@ -31,7 +42,8 @@ import numpy as np
 
 from motion.free import braking_speed, check_finite, check_positive
 from motion.pose import NUM_AXES, EmcPose
-from motion.tp.geometry import EPS, ArcPiece, LinePiece, Piece, blend_arc, circle_piece
+from motion.tp.geometry import EPS, XYZ, ArcPiece, LinePiece, Piece, blend_arc, circle_piece
+from motion.tp.spindlesync import RigidTap, follow_speed
 
 # Part of the acceleration budget a curved piece may use for centripetal acceleration.
 NORMAL_FRACTION = 0.5
@@ -52,6 +64,8 @@ KINK_MAX_JUMP = 0.05
 COLLINEAR_ANGLE = 1e-7
 # Turns sharper than this (almost a reversal) are not blended: the joint stops instead.
 MAX_BLEND_TURN = math.pi - 1e-3
+# Trims tried when blending a corner with an arc (see _blend_curved).
+CURVED_BLEND_TRIES = 8
 
 
 class TermCond(enum.IntEnum):
@@ -60,6 +74,17 @@ class TermCond(enum.IntEnum):
     STOP = 1  # G61: come to rest at the end of the move
     EXACT = 2  # G61.1: follow the path exactly; corners slow down to what they allow
     BLEND = 3  # G64: blend corners within the tolerance
+
+
+class SyncMode(enum.IntEnum):
+    """How a move follows the spindle (EMC_TRAJ_SET_SPINDLESYNC)."""
+
+    NONE = 0
+    VELOCITY = 1  # G95: feed = feed_per_rev * spindle speed
+    POSITION = 2  # G33: path position follows the spindle revolutions
+
+
+_POSITION = int(SyncMode.POSITION)
 
 
 class ProbeType(enum.IntEnum):
@@ -82,6 +107,13 @@ class Move:
     probe: ProbeType | None = None
     is_error_without_trip: bool = True  # probe moves: G38.2/G38.4 (True), G38.3/G38.5
     line: LinePiece | None = None  # the move's line piece when it is a line (for blending)
+    arc: ArcPiece | None = None  # the move's arc piece when it is a circle (for blending)
+    end_pos: np.ndarray | None = None  # where the move ends (status dtg)
+    sync: SyncMode = SyncMode.NONE
+    feed_per_rev: float = 0.0  # path length per spindle revolution (sync moves)
+    is_waiting_for_at_speed: bool = False  # starts once the spindle is at speed
+    is_waiting_for_index: bool = False  # first move of a G33 chain: starts at the index
+    rigid_tap: RigidTap | None = None
 
 
 class TrajectoryPlanner:
@@ -116,6 +148,14 @@ class TrajectoryPlanner:
         self.probe_tripped = False
         self.probe_pos = np.zeros(NUM_AXES)
         self.error: str | None = None  # taken by the caller with take_error()
+        # spindle inputs, set by the caller every period: revolutions (counted in the
+        # programmed direction, reset to 0 by the index pulse), speed and at-speed
+        self.spindle_revs = 0.0
+        self.spindle_rps = 0.0
+        self.is_spindle_at_speed = True
+        self.is_start_held = False  # no move starts from rest while set (M19 wait)
+        self._sync = (SyncMode.NONE, 0.0)  # for the moves queued next
+        self._is_at_speed_wait_pending = False
         self._reset_queue(np.zeros(NUM_AXES))
 
     # ------------------------------------------------------------------ configuration
@@ -159,6 +199,13 @@ class TrajectoryPlanner:
         self._probe_armed = False
         self.is_paused = False
         self.distance_to_go = 0.0
+        self._sync_target = 0.0  # G33: where the spindle says the path should be
+        self._last_revs = self.spindle_revs
+        # outputs for the caller: what the planner waits for, and the factor the spindle
+        # speed is multiplied by while a rigid tap reverses it
+        self.is_waiting_for_at_speed = False
+        self.is_waiting_for_index = False
+        self.spindle_reversal = 1.0
 
     def set_position(self, pose: EmcPose | Sequence[float]) -> None:
         """Start from ``pose`` with an empty queue (entering coord mode, MOT-029)."""
@@ -194,12 +241,57 @@ class TrajectoryPlanner:
     def pose(self) -> EmcPose:
         return EmcPose(*self.pos.tolist())
 
+    @property
+    def dtg(self) -> np.ndarray:
+        """Per-axis distance from here to the end of the current move (zeros if none)."""
+        move = self.current_move
+        if move is None or move.end_pos is None:
+            return np.zeros(NUM_AXES)
+        return move.end_pos - self.pos
+
+    @property
+    def active_queue(self) -> int:
+        """Moves being executed at once: 0 idle, 1, or 2 while blending into the next."""
+        if not self._moves:
+            return 0
+        last = self._moves[0].end_s
+        for piece in self._pieces[self._head :]:
+            if piece.s0 + piece.length >= last - 1e-12:
+                return 2 if piece.v_exit > 0.0 and len(self._moves) > 1 else 1
+        return 1
+
     def set_feed_scale(self, scale: float) -> None:
         """Feed override (MOT-040/041); applies at once, with bounded acceleration."""
         self.feed_scale = _check_scale(scale)
 
     def set_rapid_scale(self, scale: float) -> None:
         self.rapid_scale = _check_scale(scale)
+
+    def set_spindle_sync(self, feed_per_rev: float, is_velocity_mode: bool) -> None:
+        """EMC_TRAJ_SET_SPINDLESYNC: the feed moves queued next follow the spindle at
+        ``feed_per_rev`` path units per revolution (0: no longer synchronised)."""
+        feed_per_rev = check_finite("feed per revolution", feed_per_rev)
+        if feed_per_rev < 0:
+            raise ValueError(f"feed per revolution must be >= 0, got {feed_per_rev}")
+        if feed_per_rev == 0:
+            self._sync = (SyncMode.NONE, 0.0)
+        else:
+            mode = SyncMode.VELOCITY if is_velocity_mode else SyncMode.POSITION
+            self._sync = (mode, feed_per_rev)
+
+    def wait_for_spindle_at_speed(self) -> None:
+        """The next feed move starts only once the spindle is at speed (spindle on with
+        wait_for_spindle_at_speed, MOT-065)."""
+        self._is_at_speed_wait_pending = True
+
+    def index_found(self) -> None:
+        """The encoder saw the index pulse (and reset its count): a G33 chain starts."""
+        if not self.is_waiting_for_index:
+            return
+        self.is_waiting_for_index = False
+        self._last_revs = 0.0
+        self._sync_target = self._pieces[self._head].s0 + self._s
+        self._moves[0].is_waiting_for_index = False
 
     # ------------------------------------------------------------------ queueing
     def add_line(
@@ -222,6 +314,36 @@ class TrajectoryPlanner:
             return  # nothing to do: LinuxCNC drops zero-length moves too
         move.line = piece
         self._append(move, piece, ini_maxvel, acc)
+
+    def add_rigid_tap(
+        self,
+        end: Sequence[float],
+        ini_maxvel: float,
+        acc: float,
+        motion_id: int = 0,
+        retract_scale: float = 1.0,
+    ) -> None:
+        """Queue a rigid tap (G33.1, EMC_TRAJ_RIGID_TAP): in to ``end`` following the
+        spindle at the synchronisation's feed per revolution, spindle reversed (its speed
+        times ``retract_scale``), out again to where it started, which is where the next
+        move starts. Needs position synchronisation (set_spindle_sync)."""
+        mode, feed_per_rev = self._sync
+        if mode != SyncMode.POSITION:
+            raise ValueError("rigid tapping needs spindle position synchronisation (G33.1)")
+        retract_scale = check_positive("rigid tap retract scale", retract_scale)
+        end_v = self._check_target(end)
+        start = self._end.copy()
+        term = TermCond.STOP
+        move = self._new_move(motion_id, ini_maxvel, ini_maxvel, acc, term, 0.0, False, None)
+        piece = LinePiece(move, start, end_v)
+        if piece.length <= EPS:
+            return
+        self._append(move, piece, ini_maxvel, acc)
+        move.rigid_tap = RigidTap(piece.length, feed_per_rev, retract_scale)
+        move.is_waiting_for_at_speed = True
+        move.is_waiting_for_index = False
+        move.end_pos = start.copy()
+        self._end = start
 
     def add_probe(
         self,
@@ -268,6 +390,7 @@ class TrajectoryPlanner:
             raise ValueError(f"circle turns must be a whole number >= 0, got {turns}")
         move = self._new_move(motion_id, vel, ini_maxvel, acc, term, tolerance, False, None)
         piece = circle_piece(move, self._end, end_v, centre_v, normal_v, int(turns))
+        move.arc = piece
         self._append(move, piece, ini_maxvel, acc)
 
     def _check_target(self, end: Sequence[float]) -> np.ndarray:
@@ -287,9 +410,24 @@ class TrajectoryPlanner:
         tolerance = check_finite("blend tolerance", tolerance)
         if tolerance < 0:
             raise ValueError(f"blend tolerance must be >= 0, got {tolerance}")
-        return Move(
+        move = Move(
             int(motion_id), float(vel), bool(is_rapid), TermCond(term), tolerance, probe=probe
         )
+        if is_rapid:
+            return move
+        move.sync, move.feed_per_rev = self._sync
+        if move.sync != SyncMode.NONE:
+            move.vel = float(ini_maxvel)  # the spindle sets the speed, within the limits
+        move.is_waiting_for_at_speed = self._is_at_speed_wait_pending
+        self._is_at_speed_wait_pending = False
+        if move.sync == SyncMode.POSITION:
+            prev = self._moves[-1] if self._moves else None
+            is_chained = prev is not None and prev.sync == SyncMode.POSITION
+            is_chained = is_chained and prev.rigid_tap is None
+            # a chain of synchronised moves starts at the index, with the spindle at speed
+            move.is_waiting_for_index = not is_chained
+            move.is_waiting_for_at_speed |= not is_chained
+        return move
 
     def _piece_limits(self, piece: Piece, ini_maxvel: float, acc: float) -> None:
         """Speed cap and acceleration of a piece; its planning speed is the cap or the
@@ -317,10 +455,11 @@ class TrajectoryPlanner:
         piece.s0 = last.s0 + last.length if last is not None else 0.0
         first_changed = min(first_changed, self._link(piece))  # the queue ends at rest
         move.end_s = piece.s0 + piece.length
-        if prev_move is None or (prev_move.vel, prev_move.is_rapid) != (move.vel, move.is_rapid):
+        if prev_move is None or _feed_key(prev_move) != _feed_key(move):
             self._feed_points.append((piece.s0, move))
         self._moves.append(move)
         self._end = piece.end if isinstance(piece, LinePiece) else piece.point(piece.length)
+        move.end_pos = self._end.copy()
         if self._first_dirty is None or first_changed < self._first_dirty:
             self._first_dirty = first_changed
         dt = self.cycle_time
@@ -333,15 +472,26 @@ class TrajectoryPlanner:
         index = len(self._pieces) - 1
         if prev_move.term == TermCond.STOP or prev_move.probe is not None:
             return index  # exact stop: exit stays 0
-        if (
-            prev_move.term == TermCond.BLEND
-            and isinstance(tail, LinePiece)
-            and isinstance(piece, LinePiece)
-            and tail is prev_move.line
-            and tail.is_single_group()
-            and piece.is_single_group()
-        ):
-            arc = self._blend(prev_move, tail, piece)
+        if move.is_waiting_for_at_speed or move.is_waiting_for_index:
+            return index  # the move starts at rest (it may have to wait)
+        is_threading = SyncMode.POSITION in (prev_move.sync, move.sync)
+        if is_threading and prev_move.sync != move.sync:
+            return index  # a G33 chain ends at rest: no blend into unsynchronised motion
+        arc = None
+        # each move's own line or arc (not a blend arc), so a piece is trimmed only once
+        is_own = (tail is prev_move.line or tail is prev_move.arc) and (
+            piece is move.line or piece is move.arc
+        )
+        if prev_move.term == TermCond.BLEND and is_own:
+            if (
+                isinstance(tail, LinePiece)
+                and isinstance(piece, LinePiece)
+                and tail.is_single_group()
+                and piece.is_single_group()
+            ):
+                arc = self._blend(prev_move, tail, piece)
+            elif _is_corner(tail, piece):
+                arc = self._blend_curved(prev_move, tail, piece)
             if arc is not None:
                 arc.s0 = tail.s0 + tail.length
                 tail.exit_max = min(tail.vplan, arc.vplan)
@@ -403,6 +553,60 @@ class TrajectoryPlanner:
                 return None
         line1.trim_end(d)
         line2.trim_start(d)
+        return arc
+
+    def _blend_curved(self, move: Move, p1: Piece, p2: Piece) -> ArcPiece | None:
+        """Blend a G64 corner where an arc meets a line or another arc (flat circles and
+        lines in one XYZ plane): trim both pieces near the corner and join the trimmed
+        ends by a tangent arc, the corner staying within the tolerance; or None.
+
+        The trims ``d1``/``d2`` are chosen so that the tangents at the new ends meet at
+        the same distance from both ends: then one circular arc is tangent to both. The
+        first guess is the line-line blend of the corner's tangents; it shrinks until the
+        arc keeps to the tolerance."""
+        t1, t2 = _unit(p1.tangent(p1.length)), _unit(p2.tangent(0.0))
+        turn = math.acos(max(-1.0, min(1.0, float(t1 @ t2))))
+        if not COLLINEAR_ANGLE < turn < MAX_BLEND_TURN or not _is_flat_corner(p1, p2, t1, t2):
+            return None
+        avail1 = min(0.5 * p1.full_length, p1.length)
+        is_running = bool(self._pieces) and p1 is self._pieces[self._head]
+        if is_running:
+            avail1 = min(avail1, p1.length - self._s - 2 * self.vel * self.cycle_time)
+        avail2 = 0.5 * p2.length
+        for p in (p1, p2):  # an arc gives at most one radian to a blend
+            if isinstance(p, ArcPiece):
+                avail1, avail2 = min(avail1, p.r0), min(avail2, p.r0)
+        tolerance = TOLERANCE_FRACTION * min(p1.full_length, p2.full_length)
+        if move.tolerance > 0:
+            tolerance = min(tolerance, move.tolerance)
+        half = 0.5 * turn
+        d1 = min(avail1, tolerance * math.cos(half) / (1.0 - math.cos(half)) * math.tan(half))
+        corner = p1.point(p1.length)[XYZ]
+        for _ in range(CURVED_BLEND_TRIES):
+            if d1 <= 1e-9:
+                return None
+            found = _tangent_arc(move, p1, p2, d1, avail2)
+            if found is None:
+                d1 *= 0.5
+                continue
+            arc, d2 = found
+            deviation = abs(float(np.linalg.norm(corner - arc.centre[XYZ])) - arc.r0)
+            if deviation <= tolerance:
+                break
+            d1 *= 0.98 * tolerance / deviation  # the deviation grows about as the trim
+        else:
+            return None
+        acc = min(p1.acc, p2.acc)
+        self._piece_limits(arc, min(p1.vplan, p2.vplan), acc)
+        v1, v2 = min(p1.vplan, move.vel), min(p2.vplan, p2.move.vel)
+        if not _is_blend_faster(v1, v2, arc, 0.5 * (d1 + d2), acc):
+            return None
+        if is_running:  # the runtime must still be able to brake onto the arc's speed
+            room = p1.length - d1 - self._s - self.vel * self.cycle_time
+            if self.vel * self.vel > arc.vcap**2 + 2 * p1.acc * max(room, 0.0):
+                return None
+        p1.trim_end(d1)
+        p2.trim_start(d2)
         return arc
 
     def _kink_speed(self, tail: Piece, piece: Piece) -> float:
@@ -534,15 +738,35 @@ class TrajectoryPlanner:
         self._check_probe(move)
         if not self._moves:  # the probe check aborted a move that had not started
             return self.pos
+        revs = self.spindle_revs
+        revs_delta = revs - self._last_revs
+        self._last_revs = revs
+        is_held = move.is_waiting_for_at_speed or move.is_waiting_for_index or self.is_start_held
+        if is_held and self._is_holding(move):
+            return self.pos
+        if move.rigid_tap is not None:
+            return self._step_rigid_tap(p, move)
+        is_threading = move.sync == _POSITION  # (a plain int compare: the hot path)
+        if is_threading:
+            self._sync_target += revs_delta * move.feed_per_rev
         v = self.vel
         acc = p.acc
-        if self._is_stopping:  # pause, abort, probe trip: brake along the path
+        # pause, abort, probe trip: brake along the path; a feed hold waits for the end
+        # of a G33 move (stopping there would spoil the thread), as LinuxCNC's does
+        if self._is_stopping and not (is_threading and not self._is_aborting):
             v_new = max(v - self._touched_acc(v) * dt, 0.0)
             self._advance(0.5 * (v + v_new) * dt, v_new)
             return self.pos
-        scale = self.rapid_scale if move.is_rapid else self.feed_scale
-        v_new = min(move.vel * scale, p.vcap)
         s_here = p.s0 + self._s
+        if is_threading:  # G33: follow the revolutions, no override
+            v_feed = revs_delta * move.feed_per_rev / dt
+            v_new = follow_speed(self._sync_target - s_here, v_feed, v, acc, dt)
+        elif move.sync:
+            v_new = self._feed_speed(move)
+        else:
+            v_new = move.vel * (self.rapid_scale if move.is_rapid else self.feed_scale)
+        if v_new > p.vcap:
+            v_new = p.vcap
         # Every piece this period may reach limits the speed with its cap and with its
         # braking curve onto its planned exit. The plan is consistent piece by piece (each
         # exit can be reached from the previous one at that piece's acceleration), so the
@@ -573,14 +797,63 @@ class TrajectoryPlanner:
         for s_feed, ahead in feed_points:
             if s_feed - s_here > horizon:
                 break
-            ahead_scale = self.rapid_scale if ahead.is_rapid else self.feed_scale
-            v_new = min(v_new, braking_speed(s_feed - s_here, v, acc, dt, ahead.vel * ahead_scale))
+            v_new = min(v_new, braking_speed(s_feed - s_here, v, acc, dt, self._feed_speed(ahead)))
         if self._step_end is not None:
             v_new = min(v_new, braking_speed(self._step_end - s_here, v, acc, dt))
         if is_kink_step:  # the joint's velocity jump takes KINK_FRACTION of the budget
             a_low *= 1.0 - KINK_FRACTION
         v_new = max(min(v_new, v + a_low * dt), v - a_low * dt, 0.0)
         self._advance(0.5 * (v + v_new) * dt, v_new)
+        return self.pos
+
+    def _feed_speed(self, move: Move) -> float:
+        """The speed a move asks for now: its feed with the override, or from the
+        spindle's speed when it is synchronised (G95; G33 without its position tracking)."""
+        if not move.sync:
+            return move.vel * (self.rapid_scale if move.is_rapid else self.feed_scale)
+        speed = move.feed_per_rev * abs(self.spindle_rps)
+        return speed if move.sync == _POSITION else speed * self.feed_scale
+
+    def _is_holding(self, move: Move) -> bool:
+        """Whether a move that has not started yet waits, at rest at its start, for the
+        spindle to be at speed or for the index pulse of a G33 chain; or, while
+        ``is_start_held``, any move that would start from rest."""
+        if self.is_start_held and self.vel == 0.0 and self._s == 0.0:
+            return True
+        self.is_waiting_for_at_speed = move.is_waiting_for_at_speed and not (
+            self.is_spindle_at_speed
+        )
+        if self.is_waiting_for_at_speed:
+            return True
+        move.is_waiting_for_at_speed = False
+        if move.is_waiting_for_index and not self._is_aborting:
+            self.is_waiting_for_index = True
+            return True
+        return False
+
+    def _step_rigid_tap(self, p: Piece, move: Move) -> np.ndarray:
+        """One period of a rigid tap (it ignores feed hold; abort stops it where it is)."""
+        tap = move.rigid_tap
+        dt = self.cycle_time
+        if self._is_aborting:
+            u = tap.stop(p.acc, dt)
+        else:
+            u = tap.step(self.spindle_revs, p.vcap, p.acc, dt)
+        self.spindle_reversal = tap.reversal
+        self.pos = p.point(u)
+        self.vel = abs(tap.vel)
+        self.motion_id = move.motion_id
+        self.distance_to_go = abs(u) if tap.state else tap.depth - u
+        if not tap.is_done:
+            return self.pos
+        self.vel = 0.0
+        if self._is_aborting or self._head + 1 >= len(self._pieces):
+            self._finish_move(move)
+            self._reset_queue(self.pos)
+            return self.pos
+        self._finish_move(move)
+        self._head += 1
+        self._s = 0.0
         return self.pos
 
     def _touched_acc(self, v: float) -> float:
@@ -709,6 +982,85 @@ def _is_blend_faster(v1: float, v2: float, arc: ArcPiece, cut: float, acc: float
     blend = slowdown + arc.length / w - cut / v1 - cut / v2
     # the estimate ignores the lower acceleration near the arc: demand a clear gain
     return blend < BLEND_GAIN * stop
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    return v / float(np.linalg.norm(v))
+
+
+def _is_corner(tail: Piece, piece: Piece) -> bool:
+    """A direction change too large to pass at speed (see _kink_speed)."""
+    jump = np.abs(piece.tangent(0.0) - tail.tangent(tail.length))
+    return float(jump.max()) > KINK_MAX_JUMP
+
+
+def _is_flat_corner(p1: Piece, p2: Piece, t1: np.ndarray, t2: np.ndarray) -> bool:
+    """Whether both pieces lie in the XYZ plane of the corner's tangents ``t1``, ``t2``:
+    lines moving XYZ only, flat circles about that plane's normal."""
+    normal = _unit(np.cross(t1[XYZ], t2[XYZ]))
+    for p in (p1, p2):
+        if isinstance(p, LinePiece):
+            if not p.is_xyz_only():
+                return False
+        elif isinstance(p, ArcPiece):
+            arc_normal = p.plane_normal()
+            if arc_normal is None or float(np.linalg.norm(np.cross(arc_normal, normal))) > 1e-9:
+                return False
+        else:
+            return False
+    return True
+
+
+def _tangent_arc(
+    move: Move, p1: Piece, p2: Piece, d1: float, d2_max: float
+) -> tuple[ArcPiece, float] | None:
+    """The arc tangent to ``p1`` at ``d1`` before its end and to ``p2`` at some ``d2``
+    after its start, with the ``d2`` (up to ``d2_max``) where the two tangent lines meet
+    as far from both points; or None when there is no such ``d2``."""
+    start = p1.point(p1.length - d1)
+    t1 = _unit(p1.tangent(p1.length - d1))
+
+    def legs(d2: float) -> tuple[float, float, np.ndarray]:
+        """How far the tangents' meeting point is from each end, and p2's direction."""
+        t2 = _unit(p2.tangent(d2))
+        w = p2.point(d2) - start
+        c = float(t1 @ t2)
+        det = 1.0 - c * c
+        if det < 1e-12:  # parallel tangents never meet: treat as trimmed too far
+            return 0.0, math.inf, t2
+        w1, w2 = float(t1 @ w), float(t2 @ w)
+        return (w1 - c * w2) / det, (w2 - c * w1) / det, t2
+
+    lo, hi = 0.0, d2_max
+    a, b, _ = legs(lo)
+    if a - b <= 0.0:
+        return None  # the meeting point is nearer p1's end even without trimming p2
+    a, b, _ = legs(hi)
+    if a - b >= 0.0:
+        return None  # the meeting point is nearer p2's end even at the largest trim
+    for _ in range(60):  # bisection on a - b, which falls as d2 grows
+        mid = 0.5 * (lo + hi)
+        a, b, _ = legs(mid)
+        if a - b > 0.0:
+            lo = mid
+        else:
+            hi = mid
+        if hi - lo <= 1e-12 * (1.0 + hi):
+            break
+    d2 = 0.5 * (lo + hi)
+    a, b, t2 = legs(d2)
+    if not (a > 1e-9 and b > 1e-9 and abs(a - b) <= 1e-9 * (1.0 + a)):
+        return None  # (a - b jumped over 0: the tangents' meeting point went to infinity)
+    turn = math.acos(max(-1.0, min(1.0, float(t1 @ t2))))
+    if not COLLINEAR_ANGLE < turn < MAX_BLEND_TURN:
+        return None
+    radius = 0.5 * (a + b) / math.tan(0.5 * turn)
+    return blend_arc(move, start + t1 * a, t1, t2, radius, turn), d2
+
+
+def _feed_key(move: Move) -> tuple:
+    """What makes the feed of two moves differ (a feed change point between them)."""
+    return (move.vel, move.is_rapid, move.sync, move.feed_per_rev)
 
 
 def _check_scale(scale: float) -> float:

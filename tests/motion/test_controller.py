@@ -218,8 +218,8 @@ def test_settings_task_sends_with_every_program_are_accepted() -> None:
     ):
         assert motion.handle(cmd) is None, cmd.NAME
     assert motion.tool_offset.z == 12.5 and not motion.is_feed_override_enabled
-    refused = motion.handle(emc.EMC_TRAJ_SET_SPINDLESYNC(spindle=0, feed_per_revolution=1.5))
-    assert refused.startswith("spindle-synchronised motion")
+    refused = motion.handle(emc.EMC_TRAJ_SET_SPINDLESYNC(spindle=3, feed_per_revolution=1.5))
+    assert refused == "spindle 3 does not exist (num_spindles 1)"
 
 
 def test_spindle_speed_changes_keep_the_direction() -> None:

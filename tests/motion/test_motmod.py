@@ -206,3 +206,31 @@ def test_replaceable_modules_are_checked_when_motmod_loads(
         host.send_signal(signal.SIGTERM)
         host.wait(timeout=10)
         task.close()
+
+
+def test_mpg_wheel_pins_jog_the_joint(machine: Task) -> None:
+    configure(machine)
+    machine.send(emc.EMC_TRAJ_ENABLE())
+    for name, value in (("jog-scale", "0.1"), ("jog-counts", "7"), ("jog-enable", "1")):
+        assert run_cnc("halcmd", "setp", f"joint.0.{name}", value).returncode == 0
+    # counts that arrived before the wheel was enabled are dropped (motion(9))
+    assert run_cnc("halcmd", "setp", "joint.0.jog-counts", "32").returncode == 0
+    assert settled_pin("joint.0.motor-pos-cmd", 2.5) == pytest.approx(2.5)
+
+
+def test_spindle_and_wheel_pins_have_motion9s_names(machine: Task) -> None:
+    spindle = (
+        "amp-fault-in at-speed brake forward index-enable inhibit is-oriented locked on orient "
+        "orient-angle orient-fault orient-mode reverse revs speed-cmd-rps speed-in speed-out "
+        "speed-out-abs speed-out-rps speed-out-rps-abs"
+    )
+    wheel = "jog-accel-fraction jog-counts jog-enable jog-scale jog-vel-mode"
+    names = [f"spindle.0.{n}" for n in spindle.split()]
+    names += [f"{part}.{n}" for part in ("joint.2", "axis.x") for n in wheel.split()]
+    names += [f"motion.jog-{n}" for n in ("inhibit", "stop", "stop-immediate", "is-active")]
+    hal = Hal()
+    try:
+        assert [n for n in names if hal.find_pin(n) is None] == []
+        assert hal.pin_value(hal.find_pin("spindle.0.at-speed")[1]) == 1  # default TRUE
+    finally:
+        hal.close()

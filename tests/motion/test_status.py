@@ -1,0 +1,80 @@
+"""EMC_MOTION_STAT fields with LinuxCNC's meanings (MOT-001, MOT-066..071): dtg,
+distance_to_go, current_vel, activeQueue, motion_type and the spindle status."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from motion.controller import FREE, OrientState
+from nml import emc
+from tests.motion.test_controller import enabled_homed, move, run
+
+
+def status(motion) -> emc.EMC_MOTION_STAT:
+    stat = emc.EMC_MOTION_STAT()
+    motion.fill_status(stat)
+    return stat
+
+
+def xyz(pose: emc.EmcPose) -> tuple[float, float, float]:
+    return pose.tran.x, pose.tran.y, pose.tran.z
+
+
+def test_dtg_is_what_is_left_of_the_current_move_per_axis() -> None:
+    motion = enabled_homed()
+    assert motion.handle(move(10.0, 5.0)) is None
+    run(motion, 100)
+    traj = status(motion).traj
+    here = motion.carte_pos_cmd
+    assert xyz(traj.dtg) == pytest.approx((10.0 - here.x, 5.0 - here.y, 0.0))
+    assert traj.distance_to_go == pytest.approx(math.hypot(*xyz(traj.dtg)))
+    assert traj.current_vel == pytest.approx(motion.tp.vel) and traj.current_vel > 0
+    assert traj.motion_type == emc.EMC_MOTION_TYPE.FEED and traj.activeQueue == 1
+    run(motion, 3000)
+    traj = status(motion).traj
+    assert xyz(traj.dtg) == (0.0, 0.0, 0.0) and traj.distance_to_go == 0.0
+    assert traj.activeQueue == 0 and traj.current_vel == 0.0 and traj.queue == 0
+
+
+def test_active_queue_is_two_while_blending_into_the_next_move() -> None:
+    motion = enabled_homed()
+    assert motion.handle(move(10.0)) is None
+    assert motion.handle(move(10.0, 10.0)) is None  # G64 corner: blended
+    seen = set()
+    for _ in range(3000):
+        run(motion, 1)
+        seen.add(status(motion).traj.activeQueue)
+    assert seen == {0, 1, 2}
+
+
+def test_current_vel_in_teleop_is_the_jog_speed_and_zero_in_free_mode() -> None:
+    motion = enabled_homed(mode=FREE)
+    jog = emc.EMC_JOG_CONT(joint_or_axis=0, vel=10.0, jjogmode=emc.JOG_MODE.JOINT)
+    assert motion.handle(jog) is None
+    run(motion, 500)
+    assert status(motion).traj.current_vel == 0.0  # free mode: no path speed
+    assert motion.handle(emc.EMC_JOG_STOP(joint_or_axis=0, jjogmode=emc.JOG_MODE.JOINT)) is None
+    run(motion, 500)
+    assert motion.handle(emc.EMC_TRAJ_SET_MODE(mode=emc.EMC_TRAJ_MODE_ENUM.TELEOP)) is None
+    for axis in (0, 1):
+        axis_jog = emc.EMC_JOG_CONT(joint_or_axis=axis, vel=3.0, jjogmode=emc.JOG_MODE.TELEOP)
+        assert motion.handle(axis_jog) is None
+    run(motion, 500)
+    assert status(motion).traj.current_vel == pytest.approx(math.hypot(3.0, 3.0))
+
+
+def test_spindle_status_orient_css_and_override() -> None:
+    motion = enabled_homed()
+    on = emc.EMC_SPINDLE_ON(spindle=0, speed=-1500.0, factor=-2000.0, xoffset=1.0)
+    assert motion.handle(on) is None
+    assert motion.handle(emc.EMC_SPINDLE_INCREASE(spindle=0, speed=100.0)) is None
+    spindle = status(motion).spindle[0]
+    assert (spindle.speed, spindle.direction, spindle.enabled) == (-1600.0, -1, 1)
+    assert (spindle.css_maximum, spindle.css_factor) == (1600.0, -2000.0)
+    assert spindle.increasing == 1 and not spindle.brake and not spindle.homed
+    assert motion.handle(emc.EMC_SPINDLE_ORIENT(spindle=0, orientation=45.0, mode=0)) is None
+    spindle = status(motion).spindle[0]
+    assert spindle.orient_state == OrientState.IN_PROGRESS and spindle.orient_fault == 0
+    assert (spindle.speed, spindle.enabled, spindle.css_maximum) == (0.0, 0, 0.0)
