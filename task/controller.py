@@ -531,7 +531,7 @@ class Task:
             elif isinstance(msg, emc.EMC_TRAJ_SET_ROTATION):
                 self.stat.task.rotation_xy = msg.rotation
             elif isinstance(msg, emc.EMC_TRAJ_SET_OFFSET):
-                if self.stat.motion.traj.queueFull or self._send_motion(msg):
+                if not self._is_everything_done() or self._send_motion(msg):
                     return
                 # the applied tool length offset (G43/G49), in step with the program
                 self.stat.task.toolOffset = msg.offset
@@ -542,6 +542,8 @@ class Task:
                 self._write_error_channel(msg)
             elif is_motion_type(msg.TYPE):
                 if self.stat.motion.traj.queueFull:
+                    return
+                if _waits_for_motion(msg) and not self._is_everything_done():
                     return
                 if self._send_motion(msg):
                     return
@@ -752,6 +754,29 @@ class Task:
                 atomic_write_text(self.setup.position_file, text)
             except OSError as exc:
                 log.error("cannot write %s: %s", self.setup.position_file, exc)
+
+
+# Motion commands of a program that go out only once every move before them is done, as
+# LinuxCNC's task preconditions have it: the spindle never changes in the middle of a cut,
+# a probe or rigid tap never blends with what came before. (Moves and their settings, and
+# the synchronised I/O of M62/M63/M67, go straight into motion's queue.)
+WAITING_FOR_MOTION = (
+    emc.EMC_SPINDLE_SPEED,
+    emc.EMC_SPINDLE_ON,
+    emc.EMC_SPINDLE_OFF,
+    emc.EMC_SPINDLE_ORIENT,
+    emc.EMC_SPINDLE_WAIT_ORIENT_COMPLETE,
+    emc.EMC_TRAJ_PROBE,
+    emc.EMC_TRAJ_RIGID_TAP,
+    emc.EMC_TRAJ_CLEAR_PROBE_TRIPPED_FLAG,
+    emc.EMC_MOTION_ADAPTIVE,
+)
+
+
+def _waits_for_motion(msg: emc.NMLmsg) -> bool:
+    if isinstance(msg, WAITING_FOR_MOTION):
+        return True
+    return isinstance(msg, emc.EMC_MOTION_SET_AOUT | emc.EMC_MOTION_SET_DOUT) and bool(msg.now)
 
 
 def _store(pose: emc.EmcPose, values: Sequence[float]) -> None:

@@ -81,3 +81,25 @@ def test_tool_offset_shows_the_applied_offset_g43_h_and_g49(start_machine) -> No
     assert s.tool_offset[2] == pytest.approx(10.0)
     mdi(machine, "G49")
     assert s.tool_offset[2] == 0.0
+
+
+def test_spindle_commands_wait_for_the_moves_before_them(start_machine) -> None:
+    """M5 after a cut stops the spindle once the cut is done, never during it (LinuxCNC's
+    task preconditions: spindle commands wait for motion)."""
+    machine = start_machine()
+    c, s = machine.command, machine.stat
+    program = machine.folder / "cut.ngc"
+    program.write_text("G21 G90\nM3 S1000\nG1 X30 F1200\nM5\nG0 X0\nM2\n")
+    c.mode(cnc.MODE_AUTO)
+    c.wait_complete()
+    c.program_open(str(program))
+    c.wait_complete()
+    c.auto(cnc.AUTO_RUN, 0)
+    seen_during_cut = []
+    machine.until(lambda s: s.interp_state != cnc.INTERP_IDLE, timeout=5)
+    while s.interp_state != cnc.INTERP_IDLE:
+        s.poll()
+        if 2.0 < s.position[0] < 28.0 and s.motion_line == 3:
+            seen_during_cut.append(s.spindle[0]["enabled"])
+    assert seen_during_cut and all(seen_during_cut)
+    assert not s.spindle[0]["enabled"] and s.position[0] == pytest.approx(0.0)
