@@ -136,6 +136,25 @@ def format_value(hal_type: int, value: int | float, *, is_show: bool = True) -> 
     return str(int(value))
 
 
+def release_hal_mutex(instance: str | None = None) -> bool | None:
+    """Release the HAL mutex of an instance if a crashed program left it held (halcmd -R).
+
+    True when it was held and is now free, False when it was free, None when the instance
+    has no HAL mutex.
+    """
+    try:
+        mutex = posix_ipc.Semaphore(ipc_name("hal", "mutex", instance))
+    except posix_ipc.ExistentialError:
+        return None
+    try:
+        is_held = mutex.value == 0
+        if is_held:
+            mutex.release()
+        return is_held
+    finally:
+        mutex.close()
+
+
 def _empty_meta() -> dict[str, Any]:
     return {
         "next_id": 1,

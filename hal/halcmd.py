@@ -1,9 +1,13 @@
 """halcmd: LinuxCNC's HAL command language, for HAL files and the command line.
 
-``cnc halcmd [-f FILE] [-i INI] [-k] [-s] [-q|-Q|-v] [COMMAND ARGS...]``. Without a command
-or file it reads commands interactively with a ``halcmd:`` prompt. Errors name the file
-and line (``file:line: cause``). Realtime commands (loadrt, unloadrt) go to the realtime
-host, started on the first ``loadrt``; everything else acts on HAL shared memory directly.
+``cnc halcmd [-f FILE] [-i INI] [-k] [-s] [-e] [-q|-Q|-v|-V] [-R] [COMMAND ARGS...]``.
+Without a command or file it reads commands interactively with a ``halcmd:`` prompt. Errors
+name the file and line (``file:line: cause``). As in LinuxCNC: ``-q`` (the default) prints
+errors and what commands are asked to print; ``-Q`` also silences show/list/status/save;
+``-v`` (and ``-V``) adds a ``file:line:`` message for what each command did; ``-e`` echoes
+each command on stderr; ``-R`` releases a HAL mutex left held by a crashed program and exits.
+Realtime commands (loadrt, unloadrt) go to the realtime host, started on the first
+``loadrt``; everything else acts on HAL shared memory directly.
 """
 
 from __future__ import annotations
@@ -35,10 +39,13 @@ from hal.core import (
     format_value,
     is_compliant_name,
     parse_value,
+    release_hal_mutex,
 )
 from hal.rtapi_app import is_alive, purge_dead_components, release_if_unused, socket_address
 
 HOST_START_TIMEOUT_S = 15.0
+# halcmd's message levels: -Q, -q (default), -v, -V
+VERBOSITY_SILENT, VERBOSITY_ERRORS, VERBOSITY_INFO, VERBOSITY_DEBUG = 0, 1, 2, 3
 USR_READY_TIMEOUT_S = 10.0
 # LinuxCNC's lock bits: tune = load + config, so setp and start/stop stay allowed
 LOCK_LEVELS = {"none": 0, "load": 1, "config": 2, "params": 4, "run": 8, "tune": 3, "all": 255}
@@ -69,9 +76,9 @@ class HostClient:
             return False
         return True
 
-    def request(self, message: dict[str, Any]) -> dict[str, Any]:
+    def request(self, message: dict[str, Any], timeout: float = 60) -> dict[str, Any]:
         with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as sock:
-            sock.settimeout(60)
+            sock.settimeout(timeout)
             sock.connect(self.address)
             sock.sendall(json.dumps(message).encode() + b"\n")
             data = b""
@@ -214,6 +221,16 @@ class HalCmd:
         prefix = f"{self.where}: " if self.where else ""
         print(f"{prefix}{cause}", file=self.err, flush=True)
 
+    @property
+    def is_quiet(self) -> bool:
+        """-Q: show, list, status and save print nothing (errors still do)."""
+        return self.verbosity == VERBOSITY_SILENT
+
+    def info(self, text: str) -> None:
+        """A -v message: what a command did, as ``file:line: text`` on stdout."""
+        if self.verbosity >= VERBOSITY_INFO:
+            print(f"{self.where or '<commandline>:0'}: {text}", file=self.out, flush=True)
+
     def run_lines(self, lines: Iterable[str], source: str) -> int:
         """Run commands; returns the number of failed commands (stops at the first unless -k)."""
         failures = 0
@@ -245,8 +262,8 @@ class HalCmd:
             return False
         if not words:
             return True
-        if self.is_echo:
-            print(f"({number})<echo>: {' '.join(words)}", file=self.out)
+        if self.is_echo:  # -e or 'echo': each command on stderr, as halcmd does
+            print(f"({number})<echo>: {' '.join(words)}", file=self.err, flush=True)
         return self.run_words(words)
 
     def run_words(self, words: list[str]) -> bool:
@@ -313,6 +330,7 @@ class HalCmd:
             purge_dead_components(self.hal)  # leftovers of a host that crashed
         self.host.ensure()
         self.host.call({"cmd": "loadrt", "name": args[0], "args": args[1:]})
+        self.info(f"Realtime module '{args[0]}' loaded")
 
     def do_unloadrt(self, args: list[str]) -> None:
         self._need(args, 1, 1, "unloadrt name|all")
@@ -322,6 +340,7 @@ class HalCmd:
             self.host.call({"cmd": "unloadall"})
         else:
             self.host.call({"cmd": "unloadrt", "name": args[0]})
+            self.info(f"Realtime module '{args[0]}' unloaded")
 
     def do_loadusr(self, args: list[str]) -> None:
         self._need(args, 1, None, "loadusr [-W|-w|-i|-n name] program [args...]")
@@ -352,8 +371,12 @@ class HalCmd:
             rc = proc.wait()
             if rc and not is_ignore_rc:
                 raise HalError(f"program '{args[0]}' failed, returned {rc}")
-        elif is_wait_ready:
+            self.info(f"Program '{args[0]}' finished")
+            return
+        if is_wait_ready:
             self._wait_ready(comp_name, proc)
+            self.info(f"Component '{comp_name}' ready")
+        self.info(f"Program '{args[0]}' started")
 
     def _wait_ready(self, comp_name: str, proc: subprocess.Popen[bytes]) -> None:
         deadline = time.monotonic() + USR_READY_TIMEOUT_S
@@ -371,6 +394,7 @@ class HalCmd:
         comp = self.hal.meta["comps"].get(args[0])
         if comp is None or comp["kind"] != "user":
             raise HalError(f"component '{args[0]}' not found or not a user space component")
+        self.info(f"Waiting for component '{args[0]}'")
         proc = self.user_procs.pop(args[0], None)
         if proc is not None:
             proc.wait()
@@ -381,6 +405,7 @@ class HalCmd:
                     self.hal.remove_component(args[0])
                 break
             time.sleep(0.05)
+        self.info(f"Component '{args[0]}' finished")
 
     def do_unloadusr(self, args: list[str]) -> None:
         self._need(args, 1, 1, "unloadusr name|all")
@@ -460,6 +485,7 @@ class HalCmd:
         names = list(self.hal.meta["sigs"]) if args[0] == "all" else [args[0]]
         for name in names:
             self.hal.delete_signal(name)
+            self.info(f"Signal '{name}' deleted'")  # sic: halcmd's stray quote
 
     def do_net(self, args: list[str]) -> None:
         self._need(args, 1, None, "net signame [=>|<=|<=>] pin...")
@@ -486,18 +512,22 @@ class HalCmd:
             ordered = sorted(found, key=lambda p: p[1]["dir"] == HAL_IN)
             for name, _ in ordered:
                 self.hal.link(name, sig)
+        for name in pins:
+            self.info(f"Pin '{name}' linked to signal '{sig}'")
 
     def do_linkps(self, args: list[str]) -> None:
         args = [a for a in args if a not in _ARROWS]
         self._need(args, 2, 2, "linkps pinname signame")
         self._check_lock(2, "linkps")
         self.hal.link(args[0], args[1])
+        self.info(f"Pin '{args[0]}' linked to signal '{args[1]}'")
 
     def do_linksp(self, args: list[str]) -> None:
         args = [a for a in args if a not in _ARROWS]
         self._need(args, 2, 2, "linksp signame pinname")
         self._check_lock(2, "linksp")
         self.hal.link(args[1], args[0])
+        self.info(f"Pin '{args[1]}' linked to signal '{args[0]}'")
 
     def do_linkpp(self, args: list[str]) -> None:
         args = [a for a in args if a not in _ARROWS]
@@ -510,22 +540,27 @@ class HalCmd:
             self.hal.new_signal(args[0], first[1]["type"])
             self.hal.link(args[0], args[0])
             self.hal.link(args[1], args[0])
+        for name in args:
+            self.info(f"Pin '{name}' linked to signal '{args[0]}'")
 
     def do_unlinkp(self, args: list[str]) -> None:
         self._need(args, 1, 1, "unlinkp pinname")
         self._check_lock(2, "unlinkp")
         self.hal.unlink(args[0])
+        self.info(f"Pin '{args[0]}' unlinked")
 
     # ------------------------------------------------------------ values
     def do_setp(self, args: list[str]) -> None:
         self._need(args, 2, 2, "setp name value")
         self._check_lock(4, "setp")
+        self.info(f"setting parameter '{args[0]}' to '{args[1]}'")
         param = self.hal.find_param(args[0])
         if param is not None:
             _name, info = param
             if info["dir"] == HAL_RO:
                 raise HalError(f"param '{args[0]}' is not writable")
             self.hal.write_slot(info["type"], info["slot"], self._parse(info["type"], args[1]))
+            self.info(f"Parameter '{args[0]}' set to {args[1]}")
             return
         pin = self.hal.find_pin(args[0])
         if pin is None:
@@ -536,6 +571,7 @@ class HalCmd:
         if info["sig"] is not None:
             raise HalError(f"pin '{args[0]}' is connected to a signal")
         self.hal.write_slot(info["type"], info["slot"], self._parse(info["type"], args[1]))
+        self.info(f"Pin '{args[0]}' set to {args[1]}")
 
     @staticmethod
     def _parse(hal_type: int, text: str) -> int | float:
@@ -550,6 +586,7 @@ class HalCmd:
         if sig["writers"]:  # I/O pins share a signal with whoever sets it, as in LinuxCNC
             raise HalError(f"signal '{args[0]}' already has writer(s)")
         self.hal.write_slot(sig["type"], sig["slot"], parse_value(sig["type"], args[1]))
+        self.info(f"Signal '{args[0]}' set to {args[1]}")
 
     def _lookup(self, name: str) -> tuple[str, int, int | float]:
         """(kind, type, value) of a pin or parameter."""
@@ -595,26 +632,30 @@ class HalCmd:
         except ValueError:
             raise HalError(f"addf: position '{args[2]}' is not a whole number") from None
         self.hal.add_funct(args[0], args[1], position)
+        self.info(f"Function '{args[0]}' added to thread '{args[1]}'")
 
     def do_delf(self, args: list[str]) -> None:
         self._need(args, 1, 2, "delf funcname [threadname]")
         self._check_lock(2, "delf")
         if len(args) == 2:
-            self.hal.del_funct(args[0], args[1])
-            return
-        threads = [t for t, i in self.hal.meta["threads"].items() if args[0] in i["functs"]]
-        if not threads:
-            raise HalError(f"function '{args[0]}' not linked to any thread")
+            threads = [args[1]]
+        else:
+            threads = [t for t, i in self.hal.meta["threads"].items() if args[0] in i["functs"]]
+            if not threads:
+                raise HalError(f"function '{args[0]}' not linked to any thread")
         for thread in threads:
             self.hal.del_funct(args[0], thread)
+            self.info(f"Function '{args[0]}' removed from thread '{thread}'")
 
     def do_start(self, args: list[str]) -> None:
         self._check_lock(8, "start")
         self.hal.set_running(True)
+        self.info("Realtime threads started")
 
     def do_stop(self, args: list[str]) -> None:
         self._check_lock(8, "stop")
         self.hal.set_running(False)
+        self.info("Realtime threads stopped")
 
     # ------------------------------------------------------------ aliases and locks
     def do_alias(self, args: list[str]) -> None:
@@ -628,6 +669,7 @@ class HalCmd:
                 raise HalError(f"duplicate name '{alias}'")
             meta[table] = {k: v for k, v in meta[table].items() if v != real}
             meta[table][alias] = real
+        self.info(f"{kind} '{real}' aliased to '{alias}'")
 
     def do_unalias(self, args: list[str]) -> None:
         self._need(args, 2, 2, "unalias pin|param alias")
@@ -639,6 +681,7 @@ class HalCmd:
             if not name:
                 raise HalError(f"alias '{args[1]}' not found")
             del meta[table][name]
+        self.info(f"{args[0]} '{args[1]}' unaliased")
 
     @staticmethod
     def _alias_tables(kind: str) -> tuple[str, str]:
@@ -654,6 +697,7 @@ class HalCmd:
             raise HalError(f"Unknown lock type '{args[0]}'")
         with self.hal.edit() as meta:
             meta["lock"] = level
+        self.info("Locking completed")
 
     def do_unlock(self, args: list[str]) -> None:
         level = LOCK_LEVELS.get(args[0] if args else "all")
@@ -661,6 +705,7 @@ class HalCmd:
             raise HalError(f"Unknown unlock type '{args[0]}'")
         with self.hal.edit() as meta:
             meta["lock"] &= ~level
+        self.info("Unlocking completed")
 
     # ------------------------------------------------------------ misc
     def do_echo(self, args: list[str]) -> None:
@@ -669,6 +714,7 @@ class HalCmd:
 
     def do_unecho(self, args: list[str]) -> None:
         self.is_echo = False
+        print("Echo off", file=self.out)
 
     def do_source(self, args: list[str]) -> None:
         self._need(args, 1, 1, "source filename")
@@ -695,6 +741,8 @@ class HalCmd:
             print(f"  {verb:<14} {text.splitlines()[0]}", file=self.out)
 
     def do_status(self, args: list[str]) -> None:
+        if self.is_quiet:
+            return
         meta = self.hal.meta
         lock = meta["lock"]
         lines = ["HAL locking status:", f"  current lock value {lock} ({lock:02x})"]
@@ -725,6 +773,8 @@ class HalCmd:
     def do_show(self, args: list[str]) -> None:
         from hal import show
 
+        if self.is_quiet:
+            return
         kind = args[0] if args else "all"
         pattern = args[1] if len(args) > 1 else None
         print(show.show(self.hal, kind, pattern, is_script=self.is_script), file=self.out, end="")
@@ -733,11 +783,15 @@ class HalCmd:
         self._need(args, 1, 2, "list comp|pin|sig|param|funct|thread [pattern]")
         from hal import show
 
+        if self.is_quiet:
+            return
         print(show.listing(self.hal, args[0], args[1] if len(args) > 1 else None), file=self.out)
 
     def do_save(self, args: list[str]) -> None:
         from hal import show
 
+        if self.is_quiet:
+            return
         kind = args[0] if args else "all"
         modules = {}
         if self.host.is_running():
@@ -823,8 +877,9 @@ def parse_options(argv: list[str]) -> tuple[dict[str, Any], list[str]]:
         "ini": None,
         "keep": False,
         "script": False,
-        "verbosity": 1,
+        "verbosity": VERBOSITY_ERRORS,
         "echo": False,
+        "release_mutex": False,
     }
     args = list(argv)
     while args and args[0].startswith("-") and len(args[0]) > 1:
@@ -842,15 +897,17 @@ def parse_options(argv: list[str]) -> tuple[dict[str, Any], list[str]]:
             elif letter == "s":
                 opts["script"] = True
             elif letter == "q":
-                opts["verbosity"] = 1
+                opts["verbosity"] = VERBOSITY_ERRORS
             elif letter == "Q":
-                opts["verbosity"] = 0
-            elif letter in "vV":
-                opts["verbosity"] = 2
+                opts["verbosity"] = VERBOSITY_SILENT
+            elif letter == "v":
+                opts["verbosity"] = VERBOSITY_INFO
+            elif letter == "V":
+                opts["verbosity"] = VERBOSITY_DEBUG
             elif letter == "e":
                 opts["echo"] = True
             elif letter == "R":
-                pass  # mutex release: our mutex recovers itself after a timeout
+                opts["release_mutex"] = True
             elif letter == "h":
                 opts["help"] = True
             else:
@@ -864,13 +921,15 @@ def make_session(opts: dict[str, Any], **kwargs: Any) -> HalCmd:
         from cnc.ini import IniFile
 
         ini = IniFile.load(opts["ini"])
-    return HalCmd(
+    session = HalCmd(
         ini=ini,
         is_keep_going=opts["keep"],
         is_script=opts["script"],
         verbosity=opts["verbosity"],
         **kwargs,
     )
+    session.is_echo = opts["echo"]
+    return session
 
 
 def run_session(session: HalCmd, opts: dict[str, Any], words: list[str]) -> int:
@@ -944,6 +1003,11 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     if opts.get("help"):
         print(__doc__)
+        return 0
+    if opts["release_mutex"]:  # like halcmd -R: release, run nothing else
+        if release_hal_mutex() is None:
+            print("HALCMD: Release Mutex failed!")
+            return 1
         return 0
     try:
         session = make_session(opts)

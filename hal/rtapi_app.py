@@ -7,12 +7,16 @@ unloadall, modules, exit), one JSON object per line, answering ``{"ok": bool, "e
 memory. The host exits with its last module, like LinuxCNC's.
 
 Each HAL thread is an OS thread that sleeps to absolute deadlines (clock_nanosleep with
-TIMER_ABSTIME on CLOCK_MONOTONIC), then calls its functions in ``addf`` order. It runs
-SCHED_FIFO on the last CPU with memory locked when the system permits, and says once when it
-does not. The garbage collector is disabled (objects made while loading are frozen), so no
-collection pauses land in a period. Each thread publishes ``<thread>.time`` (pin) and
-``<thread>.tmax`` (param) like LinuxCNC, plus ``<thread>.overruns``: periods whose functions
-ran past the next deadline.
+TIMER_ABSTIME on CLOCK_MONOTONIC), then calls its functions in ``addf`` order. Where the
+system permits (it says once when it does not), the host works like LinuxCNC's: SCHED_FIFO
+at the highest priority for the fastest thread, pinned to the highest isolated CPU or else
+the last CPU, memory locked, and ``/dev/cpu_dma_latency`` held at 0 so the CPUs do not doze
+between periods; threads also wake ``--spin-us`` early and busy-wait to the deadline. The
+``$CNC_HAL_*`` variables of hal/README.md change each of these; ``--no-rt`` (or
+``CNC_HAL_NO_RT=1``) turns them all off. The garbage collector is disabled (objects made
+while loading are frozen), so no collection pauses land in a period. Each thread publishes
+``<thread>.time`` (pin) and ``<thread>.tmax`` (param) like LinuxCNC, plus
+``<thread>.overruns``: periods whose functions ran past the next deadline.
 """
 
 from __future__ import annotations
@@ -45,10 +49,25 @@ CLOCK_MONOTONIC = 1
 TIMER_ABSTIME = 1
 MCL_CURRENT, MCL_FUTURE = 1, 2
 RECOMMENDED_MEMLOCK_KIB = 20480
-RT_PRIORITY = 80
+# the fastest thread's SCHED_FIFO priority: the highest, as LinuxCNC's uspace rtapi_app
+# gives it; each slower thread gets one less
+RT_PRIORITY = os.sched_get_priority_max(os.SCHED_FIFO)
 S32_MAX = (1 << 31) - 1
 COMPONENTS_ENV = "CNC_HAL_COMPONENTS"
+NO_RT_ENV = "CNC_HAL_NO_RT"
 SPIN_ENV = "CNC_HAL_SPIN_US"
+# wake this long before each deadline and busy-wait to it (at most a quarter of the
+# period, so slower threads on the same CPU still run): with the CPU kept awake, on a
+# 2-vCPU VM the median lateness goes from 30-45 µs to 0 and the p99 from 60-470 µs to
+# 30-75 µs (scripts/bench/hal_bench.py)
+DEFAULT_SPIN_US = 100
+SPIN_PERIOD_FRACTION = 4
+CPU_ENV = "CNC_HAL_CPU"
+PRIORITY_ENV = "CNC_HAL_PRIORITY"
+ISOLATED_CPUS = Path("/sys/devices/system/cpu/isolated")
+AWAKE_ENV = "CNC_HAL_KEEP_CPU_AWAKE"
+CPU_LATENCY_FILE = Path("/dev/cpu_dma_latency")  # PM QoS: the wake-up latency we accept
+PR_SET_TIMERSLACK = 29
 
 
 def socket_address() -> str:
@@ -68,6 +87,8 @@ _clock_nanosleep.argtypes = [
     ctypes.POINTER(_Timespec),
     ctypes.c_void_p,
 ]
+_prctl = _libc.prctl
+_prctl.argtypes = [ctypes.c_int, ctypes.c_ulong, ctypes.c_ulong, ctypes.c_ulong, ctypes.c_ulong]
 
 
 def sleep_until(deadline_ns: int, spec: _Timespec) -> None:
@@ -116,6 +137,8 @@ class RtThread(threading.Thread):
         self.is_stopping = False
         self.creator = ""
         self.priority = RT_PRIORITY
+        #: how early the thread wakes to busy-wait to each deadline
+        self.spin_ns = min(host.spin_ns, self.period // SPIN_PERIOD_FRACTION)
         comp = f"__{name}"
         self.comp = comp
         hal = host.hal
@@ -127,8 +150,8 @@ class RtThread(threading.Thread):
             self.overruns = hal.new_param(comp, f"{name}.overruns", HAL_S32, HAL_RO)
             hal.new_thread(comp, name, self.period, has_fp=has_fp)
             hal.ready(comp)
-        #: when set (benchmarks), each period appends (deadline, start) in ns
-        self.timing_log: list[tuple[int, int]] | None = None
+        #: when set (benchmarks), each period appends (deadline, start, end) in ns
+        self.timing_log: list[tuple[int, int, int]] | None = None
 
     def _chain(self) -> tuple[int, bool, list[_Funct]]:
         """(metadata generation, is HAL started, this thread's functions in addf order)."""
@@ -147,15 +170,12 @@ class RtThread(threading.Thread):
         deadline = (clock() // period + 1) * period
         gen, is_running, chain = -1, False, []
         q, ptr = hal.q, hal.ptr
-        spin = self.host.spin_ns
+        spin = self.spin_ns
         while not self.is_stopping:
             sleep_until(deadline - spin, spec)
             start = clock()
             while start < deadline:  # optional busy wait: trades CPU for wake-up latency
                 start = clock()
-            log = self.timing_log
-            if log is not None:
-                log.append((deadline, start))
             if hal.generation != gen:
                 gen, is_running, chain = self._chain()
             if is_running:
@@ -184,6 +204,9 @@ class RtThread(threading.Thread):
                 q[ptr[self.time]] = spent
                 if spent > q[self.tmax]:
                     q[self.tmax] = spent
+            log = self.timing_log
+            if log is not None:
+                log.append((deadline, start, end))
             deadline += period
             if end > deadline:
                 q[self.overruns] += 1
@@ -199,11 +222,27 @@ class LoadedModule:
 class Host:
     """The realtime host's state: loaded modules, functions and threads."""
 
-    def __init__(self, hal: Hal, *, is_rt: bool = True, spin_us: int = 0) -> None:
+    def __init__(
+        self,
+        hal: Hal,
+        *,
+        is_rt: bool = True,
+        spin_us: int = 0,
+        is_cpu_kept_awake: bool = False,
+        cpu: int | None = None,
+        priority: int = RT_PRIORITY,
+    ) -> None:
         self.hal = hal
         self.is_rt = is_rt
-        #: wake up this early and busy-wait to the deadline (0: plain absolute sleep)
-        self.spin_ns = max(int(spin_us), 0) * 1000
+        #: wake up this early and busy-wait to the deadline (0, or not realtime: only sleep)
+        self.spin_ns = max(int(spin_us), 0) * 1000 if is_rt else 0
+        #: hold /dev/cpu_dma_latency at 0 so idle CPUs poll instead of halting
+        self.is_cpu_kept_awake = is_cpu_kept_awake
+        self._cpu_latency_file: Any = None
+        #: the CPU realtime threads run on (None: ``default_rt_cpu()``)
+        self.cpu = cpu
+        #: SCHED_FIFO priority of the fastest thread
+        self.priority = priority
         self.modules: dict[str, LoadedModule] = {}
         self.functs: dict[str, _Funct] = {}
         self.threads: dict[str, RtThread] = {}
@@ -236,9 +275,34 @@ class Host:
             err = ctypes.get_errno()
             self.warn_once("memlock", f"RTAPI: cannot lock memory: {os.strerror(err)}")
 
+    def keep_cpu_awake(self) -> None:
+        """Ask the kernel for zero wake-up latency while the host runs (PM QoS).
+
+        Holding ``/dev/cpu_dma_latency`` open with 0 written keeps idle CPUs in their
+        polling state instead of halting: on a VM a halted vCPU goes back to the hypervisor
+        and its timer wake-up costs tens of microseconds more. The request lasts as long as
+        the file stays open (``release_cpu``).
+        """
+        if not (self.is_rt and self.is_cpu_kept_awake) or self._cpu_latency_file is not None:
+            return
+        try:
+            handle = CPU_LATENCY_FILE.open("wb", buffering=0)  # held open until release_cpu
+            handle.write((0).to_bytes(4, sys.byteorder))
+        except OSError as exc:
+            self.warn_once("awake", f"RTAPI: cannot keep the CPUs awake: {exc}")
+            return
+        self._cpu_latency_file = handle
+
+    def release_cpu(self) -> None:
+        """Drop the wake-up latency request of ``keep_cpu_awake``."""
+        if self._cpu_latency_file is not None:
+            self._cpu_latency_file.close()
+            self._cpu_latency_file = None
+
     def prepare(self) -> None:
         """Process-wide realtime setup: lock memory, keep the GC and long GIL holds away."""
         self.lock_memory()
+        self.keep_cpu_awake()
         sys.setswitchinterval(0.0001)  # a thread waking on time gets the GIL quickly
         gc.disable()  # no collection pauses inside a period; loadrt freezes what it made
         gc.freeze()
@@ -247,6 +311,9 @@ class Host:
         """Run the calling thread on ``cpu`` with SCHED_FIFO where permitted."""
         if not self.is_rt:
             return
+        # wake at the deadline, not up to the default 50 µs after it (normal priority only:
+        # the kernel gives SCHED_FIFO threads no slack anyway)
+        _prctl(PR_SET_TIMERSLACK, 1, 0, 0, 0)
         if cpu is not None:
             try:
                 os.sched_setaffinity(0, {cpu})
@@ -385,10 +452,10 @@ class Host:
                 f"new thread period {period_ns} is less than clock period {min(periods)}"
             )
         if cpu is None:
-            cpu = (os.cpu_count() or 1) - 1
+            cpu = self.cpu if self.cpu is not None else default_rt_cpu()
         thread = RtThread(self, name, period_ns, cpu, has_fp=has_fp)
         # threads come fastest first; a faster thread preempts slower ones, as in LinuxCNC
-        thread.priority = max(RT_PRIORITY - len(self.threads), 1)
+        thread.priority = max(self.priority - len(self.threads), 1)
         thread.creator = creator
         self.threads[name] = thread
         thread.start()
@@ -484,6 +551,18 @@ class Host:
     def shutdown(self) -> None:
         with contextlib.suppress(Exception):
             self.unload_all()
+        self.release_cpu()
+
+
+def default_rt_cpu() -> int:
+    """Where realtime threads run: the highest isolated CPU (``isolcpus=``), else the last
+    one, as LinuxCNC chooses."""
+    isolated: list[int] = []
+    with contextlib.suppress(OSError, ValueError):
+        for part in filter(None, ISOLATED_CPUS.read_text().strip().split(",")):
+            first, _, last = part.partition("-")
+            isolated.extend(range(int(first), int(last or first) + 1))
+    return max(isolated) if isolated else (os.cpu_count() or 1) - 1
 
 
 def purge_dead_components(hal: Hal) -> list[str]:
@@ -515,25 +594,42 @@ def is_alive(pid: int) -> bool:
     return True
 
 
-def _env_int(name: str) -> int:
-    text = os.environ.get(name, "") or "0"
+def _env_int(name: str, default: int | None) -> int | None:
+    text = os.environ.get(name, "")
+    if not text:
+        return default
     try:
         return int(text)
     except ValueError:
         print(f"rtapi_app: ignoring ${name}={text!r} (not a whole number)", file=sys.stderr)
-        return 0
+        return default
+
+
+def host_options_from_env() -> dict[str, Any]:
+    """``Host`` settings: the defaults, changed by the ``$CNC_HAL_*`` knobs of hal/README.md."""
+    return {
+        "is_rt": os.environ.get(NO_RT_ENV) != "1",
+        "spin_us": _env_int(SPIN_ENV, DEFAULT_SPIN_US),
+        "is_cpu_kept_awake": _env_int(AWAKE_ENV, 1) != 0,
+        "cpu": _env_int(CPU_ENV, None),
+        "priority": _env_int(PRIORITY_ENV, RT_PRIORITY),
+    }
 
 
 def main(argv: list[str] | None = None) -> int:
+    options = host_options_from_env()
     parser = argparse.ArgumentParser(prog="rtapi_app", description=__doc__.splitlines()[0])
     parser.add_argument("--no-rt", action="store_true", help="no SCHED_FIFO, no mlockall")
     parser.add_argument(
         "--spin-us",
         type=int,
-        default=_env_int(SPIN_ENV),
-        help=f"wake this early and busy-wait to each deadline (default ${SPIN_ENV} or 0)",
+        default=options["spin_us"],
+        help=f"wake this early and busy-wait to each deadline (default ${SPIN_ENV} "
+        f"or {DEFAULT_SPIN_US}; 0 only sleeps)",
     )
     opts = parser.parse_args(argv)
+    options["spin_us"] = opts.spin_us
+    options["is_rt"] = options["is_rt"] and not opts.no_rt
     server = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
     try:
         server.bind(socket_address())
@@ -542,8 +638,7 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     server.listen(8)
     hal = Hal()
-    is_rt = not opts.no_rt and os.environ.get("CNC_HAL_NO_RT") != "1"
-    host = Host(hal, is_rt=is_rt, spin_us=opts.spin_us)
+    host = Host(hal, **options)
     host.prepare()
     for signum in (signal.SIGTERM, signal.SIGINT, signal.SIGHUP):
         signal.signal(signum, lambda *_: host.is_exiting.set())

@@ -1,18 +1,26 @@
 """HAL benchmark: 1 kHz thread lateness with 20 typical components, idle and with load.
 
-    .venv/bin/python scripts/bench/hal_bench.py [--seconds S] [--no-lcnc] [--spin-us N]
+    .venv/bin/python scripts/bench/hal_bench.py [--seconds S] [--repeat N] [--no-lcnc]
+        [--no-c] [--spin-us N] [--awake 0|1] [--cpu N] [--priority N]
 
-Prints one JSON object:
+The host runs with its defaults and ``$CNC_HAL_*`` settings (hal/README.md), changed by the
+options; ``host`` in the report says which. Prints one JSON object:
 
 - ``idle`` / ``loaded``: lateness of each period's start after its absolute deadline
-  (p50/p99/p99.9/max in µs), ``overruns`` (periods whose functions ran past the next
-  deadline) and ``periods`` measured; ``interval_jitter`` has the same statistics for
+  (p50/p99/p99.9/max in µs; a period skipped after an overrun counts as late as the next
+  start), ``overruns`` (periods whose functions ran past the next deadline), ``periods``,
+  ``thread_time`` (how long the functions took), ``steal_ms`` (time the hypervisor gave the
+  vCPU to others), ``other_rt_threads`` (realtime threads of other processes on the CPU:
+  other hosts at the same priority delay ours); ``interval_jitter`` has the statistics of
   |time between two period starts - period|, the metric measured for LinuxCNC. ``loaded``
-  runs one busy process per other CPU.
+  runs one busy process on every other CPU. With ``--repeat`` each is a list, and
+  ``*_spread`` gives [min, max] over the runs.
+- ``c_idle`` / ``c_loaded``: the same loop in C (hal_latency.c, built with gcc when there is
+  one) with the same CPU, priority, spin and keep-awake settings: what the machine allows.
 - ``pin_rw_ns``: cost of one pin access (read or write) from a component's function.
-- ``lcnc`` (when LinuxCNC's halrun is installed): LinuxCNC's 1 ms thread measured with its
-  ``timedelta`` component and ``halsampler`` (|interval - period|, the only per-period timing
-  LinuxCNC exposes), idle; ``lcnc_loaded`` the same with load.
+- ``lcnc`` (when LinuxCNC's halrun is installed): LinuxCNC's 1 ms thread on the same CPU,
+  measured with its ``timedelta`` component and ``halsampler`` (|interval - period|, the
+  only per-period timing LinuxCNC exposes), idle; ``lcnc_loaded`` the same with load.
 """
 
 from __future__ import annotations
@@ -36,7 +44,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 from hal.api import set_shared_hal
 from hal.core import Hal
 from hal.halcmd import HalCmd
-from hal.rtapi_app import Host
+from hal.rtapi_app import Host, default_rt_cpu, host_options_from_env
 from nml.ipcnames import INSTANCE_ENV
 
 PERIOD_NS = 1_000_000
@@ -134,13 +142,10 @@ def _busy(cpu: int) -> None:
         pass
 
 
-def start_load() -> list[multiprocessing.Process]:
-    """One busy process on every CPU but the last (the realtime one)."""
-    count = os.cpu_count() or 1
-    procs = [
-        multiprocessing.Process(target=_busy, args=(cpu,), daemon=True)
-        for cpu in range(max(count - 1, 1))
-    ]
+def start_load(rt_cpu: int) -> list[multiprocessing.Process]:
+    """One busy process on every CPU but the realtime one."""
+    cpus = [cpu for cpu in range(os.cpu_count() or 1) if cpu != rt_cpu] or [rt_cpu]
+    procs = [multiprocessing.Process(target=_busy, args=(cpu,), daemon=True) for cpu in cpus]
     for proc in procs:
         proc.start()
     return procs
@@ -152,9 +157,81 @@ def stop_load(procs: list[multiprocessing.Process]) -> None:
         proc.join()
 
 
-def measure_ours(seconds: float, is_loaded: bool, spin_us: int) -> dict[str, Any]:
+def steal_ticks(cpu: int) -> int:
+    """Time the hypervisor ran something else on ``cpu``'s vCPU, in USER_HZ ticks (10 ms)."""
+    for line in Path("/proc/stat").read_text().splitlines():
+        fields = line.split()
+        if fields[0] == f"cpu{cpu}":
+            return int(fields[8])
+    return 0
+
+
+def c_command(
+    binary: str, seconds: float, host_options: dict[str, Any], priority: int
+) -> list[str]:
+    """The C loop (hal_latency.c) with the host's CPU, spin and keep-awake settings."""
+    return [
+        binary,
+        str(PERIOD_NS),
+        str(seconds),
+        str(rt_cpu(host_options)),
+        str(priority if host_options.get("is_rt", True) else 0),
+        str(host_options.get("spin_us", 0)),
+        "1" if host_options.get("is_cpu_kept_awake") else "0",
+    ]
+
+
+def rt_cpu(host_options: dict[str, Any]) -> int:
+    cpu = host_options.get("cpu")
+    return default_rt_cpu() if cpu is None else cpu
+
+
+def other_rt_threads(cpu: int) -> list[str]:
+    """SCHED_FIFO/RR threads of other processes last seen on ``cpu`` ("pid:name prio").
+
+    Other realtime hosts on the same CPU (other machines, tests) delay ours whenever their
+    priority is the same or higher: the figures mean little then.
+    """
+    found = []
+    for stat in Path("/proc").glob("[0-9]*/task/[0-9]*/stat"):
+        try:
+            text = stat.read_text()
+        except OSError:
+            continue
+        name = text[text.index("(") + 1 : text.rindex(")")]
+        fields = text[text.rindex(")") + 2 :].split()
+        # fields from 3 (state) on: processor is field 39, rt_priority 40, policy 41
+        processor, rt_priority, policy = int(fields[36]), int(fields[37]), int(fields[38])
+        pid, is_kernel = int(stat.parts[2]), fields[1] in ("0", "2")  # parent: kthreadd
+        if policy in (1, 2) and processor == cpu and pid != os.getpid() and not is_kernel:
+            found.append(f"{pid}:{name} {rt_priority}")
+    return sorted(set(found))
+
+
+def parse_c_output(text: str) -> dict[int, int]:
+    """hal_latency's lines ``deadline lateness`` as {deadline: lateness} (ns)."""
+    pairs = (line.split() for line in text.splitlines())
+    return {int(words[0]): int(words[1]) for words in pairs if len(words) == 2}
+
+
+def period_starts(starts: list[tuple[int, int]], period: int = PERIOD_NS) -> list[tuple[int, int]]:
+    """(deadline, start) of every period, from those of the periods that ran. A period
+    skipped after an overrun is included, started at the next start: it did not run at all,
+    so it counts as that late."""
+    periods = []
+    previous = None
+    for deadline, start in starts:
+        if previous is not None:
+            periods += [(missed, start) for missed in range(previous + period, deadline, period)]
+        periods.append((deadline, start))
+        previous = deadline
+    return periods
+
+
+def measure_ours(seconds: float, is_loaded: bool, host_options: dict[str, Any]) -> dict[str, Any]:
+    """Our realtime host's 1 kHz thread with the 20 components (``Host(**host_options)``)."""
     hal = Hal()
-    host = Host(hal, spin_us=spin_us)
+    host = Host(hal, **host_options)
     try:
         host.prepare()
         cmd = HalCmd(hal)
@@ -167,35 +244,80 @@ def measure_ours(seconds: float, is_loaded: bool, spin_us: int) -> dict[str, Any
         thread = host.new_thread("servo-thread", PERIOD_NS)
         for funct in FUNCTS:
             hal.add_funct(funct, "servo-thread")
-        load = start_load() if is_loaded else []
+        load = start_load(thread.cpu) if is_loaded else []
         try:
             time.sleep(0.5)  # let the load settle
             hal.set_running(True)
             time.sleep(0.2)
-            overrun_slot = hal.meta["params"]["servo-thread.overruns"]["slot"]
+            params = hal.meta["params"]
+            overrun_slot = params["servo-thread.overruns"]["slot"]
+            tmax_slot = params["servo-thread.tmax"]["slot"]
+            competitors = other_rt_threads(thread.cpu)
             before = hal.q[overrun_slot]
+            hal.q[tmax_slot] = 0
+            steal_before = steal_ticks(thread.cpu)
             thread.timing_log = log = []
-            time.sleep(seconds)
+            time.sleep(seconds)  # nothing else runs in this process meanwhile (GIL)
             thread.timing_log = None
             overruns = hal.q[overrun_slot] - before
-            tmax = hal.q[hal.meta["params"]["servo-thread.tmax"]["slot"]]
+            tmax = hal.q[tmax_slot]
+            steal = steal_ticks(thread.cpu) - steal_before
         finally:
             stop_load(load)
-        lateness = [start - deadline for deadline, start in log]
-        starts = [start for _, start in log]
+        ran = [(deadline, start) for deadline, start, _ in log]
+        lateness = [start - deadline for deadline, start in period_starts(ran)]
+        starts = [start for _, start, _ in log]
+        busy = [end - start for _, start, end in log]
         jitter = [abs(b - a - PERIOD_NS) for a, b in itertools.pairwise(starts)]
         return {
             **summary(lateness, int(overruns)),
             "thread_tmax_us": round(tmax / 1000, 1),
+            # time the functions took each period (their start is the lateness above)
+            "thread_time": summary(busy, int(overruns)),
+            "steal_ms": steal * 10,
+            "other_rt_threads": competitors,
             # the metric measured for LinuxCNC below, for a like-for-like comparison
             "interval_jitter": summary(jitter, int(overruns)),
         }
     finally:
         host.unload_all()
+        host.release_cpu()
         set_shared_hal(None)
         hal.destroy()
         hal.close()
         gc.enable()
+
+
+def build_c_check(folder: str) -> str | None:
+    """Compile hal_latency.c (the same period loop in C); None without a C compiler."""
+    compiler = shutil.which("gcc") or shutil.which("cc")
+    if compiler is None:
+        return None
+    binary = str(Path(folder) / "hal_latency")
+    source = str(Path(__file__).with_name("hal_latency.c"))
+    result = subprocess.run([compiler, "-O2", "-o", binary, source], capture_output=True)
+    return binary if result.returncode == 0 else None
+
+
+def measure_c(
+    binary: str, seconds: float, is_loaded: bool, host_options: dict[str, Any]
+) -> dict[str, Any] | None:
+    """The C loop alone with the host's settings: what the machine itself allows."""
+    cpu = rt_cpu(host_options)
+    load = start_load(cpu) if is_loaded else []
+    try:
+        time.sleep(0.5 if is_loaded else 0)
+        steal_before = steal_ticks(cpu)
+        command = c_command(binary, seconds, host_options, host_options["priority"])
+        result = subprocess.run(command, capture_output=True, text=True, timeout=seconds + 30)
+        steal = steal_ticks(cpu) - steal_before
+    finally:
+        stop_load(load)
+    ran = [(deadline, deadline + late) for deadline, late in parse_c_output(result.stdout).items()]
+    lateness = [start - deadline for deadline, start in period_starts(ran)]
+    if not lateness:
+        return None
+    return {**summary(lateness, 0), "steal_ms": steal * 10}
 
 
 def measure_pin_rw(count: int = 200_000) -> float:
@@ -229,8 +351,8 @@ show param servo-thread.tmax
 """
 
 
-def measure_lcnc(seconds: float, is_loaded: bool) -> dict[str, Any] | None:
-    """LinuxCNC's servo thread: |interval - period| of each period from timedelta."""
+def measure_lcnc(seconds: float, is_loaded: bool, cpu: int) -> dict[str, Any] | None:
+    """LinuxCNC's servo thread on ``cpu``: |interval - period| of each period (timedelta)."""
     if not shutil.which("halrun"):
         return None
     samples = int(seconds * 1e9 / PERIOD_NS)
@@ -239,10 +361,11 @@ def measure_lcnc(seconds: float, is_loaded: bool) -> dict[str, Any] | None:
         path = Path(folder) / "lat.hal"
         path.write_text(LCNC_HAL.format(period=PERIOD_NS, samples=samples))
         os.chmod(path, 0o644)
-        command = ["halrun", "-f", str(path)]
+        command = ["env", f"RTAPI_CPU_NUMBER={cpu}", "halrun", "-f", str(path)]
         if os.geteuid() == 0:  # LinuxCNC refuses to run as root
-            command = ["su", "cnc", "-c", f"cd {folder} && halrun -f {path}"]
-        load = start_load() if is_loaded else []
+            shell = f"cd {folder} && RTAPI_CPU_NUMBER={cpu} halrun -f {path}"
+            command = ["su", "cnc", "-c", shell]
+        load = start_load(cpu) if is_loaded else []
         try:
             result = subprocess.run(command, capture_output=True, text=True, timeout=seconds + 60)
         except (OSError, subprocess.TimeoutExpired):
@@ -252,33 +375,77 @@ def measure_lcnc(seconds: float, is_loaded: bool) -> dict[str, Any] | None:
     intervals = [
         int(line.split()[0]) for line in result.stdout.splitlines() if line.strip().isdigit()
     ][1:]
-    if not intervals:
-        return None
+    if not intervals:  # e.g. another LinuxCNC session holds its (machine-wide) realtime
+        lines = result.stderr.strip().splitlines()
+        return {"error": lines[-1] if lines else f"halrun exited with {result.returncode}"}
     jitter = [abs(value - PERIOD_NS) for value in intervals]
     overruns = sum(1 for value in intervals if value > 2 * PERIOD_NS)
     return summary(jitter, overruns)
 
 
+def spread(runs: list[dict[str, Any]]) -> dict[str, Any]:
+    """[min, max] over repeated runs of the figures that matter."""
+    keys = ("p50_us", "p99_us", "p999_us", "max_us", "overruns")
+    return {
+        key: [min(r[key] for r in runs), max(r[key] for r in runs)]
+        for key in keys
+        if runs and all(r.get(key) is not None for r in runs)
+    }
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=10.0, help="per measurement")
+    parser.add_argument("--repeat", type=int, default=1, help="measure idle/loaded N times")
     parser.add_argument("--no-lcnc", action="store_true", help="skip LinuxCNC")
-    parser.add_argument("--spin-us", type=int, default=0, help="host busy-wait margin (µs)")
+    parser.add_argument("--no-c", action="store_true", help="skip the C loop (hal_latency.c)")
+    parser.add_argument("--spin-us", type=int, help="host busy-wait margin (µs)")
+    parser.add_argument("--cpu", type=int, help="CPU of the realtime thread")
+    parser.add_argument("--priority", type=int, help="SCHED_FIFO priority of the thread")
+    parser.add_argument(
+        "--awake", type=int, choices=(0, 1), help="hold /dev/cpu_dma_latency at 0 (1) or not (0)"
+    )
     opts = parser.parse_args()
     os.environ[INSTANCE_ENV] = f"bench{os.getpid()}"
+    host_options = host_options_from_env()  # the host's defaults and $CNC_HAL_* knobs
+    if opts.spin_us is not None:
+        host_options["spin_us"] = opts.spin_us
+    if opts.cpu is not None:
+        host_options["cpu"] = opts.cpu
+    if opts.awake is not None:
+        host_options["is_cpu_kept_awake"] = bool(opts.awake)
+    if opts.priority is not None:
+        host_options["priority"] = opts.priority
     report: dict[str, Any] = {
         "period_us": PERIOD_NS / 1000,
         "components": len(FUNCTS),
-        "spin_us": opts.spin_us,
-        "idle": measure_ours(opts.seconds, is_loaded=False, spin_us=opts.spin_us),
-        "loaded": measure_ours(opts.seconds, is_loaded=True, spin_us=opts.spin_us),
+        "host": host_options,
         "pin_rw_ns": measure_pin_rw(),
     }
+    with tempfile.TemporaryDirectory() as folder:
+        binary = None if opts.no_c else build_c_check(folder)
+        runs: dict[str, list[dict[str, Any]]] = {}
+        for _ in range(opts.repeat):
+            for is_loaded in (False, True):
+                label = "loaded" if is_loaded else "idle"
+                runs.setdefault(label, []).append(
+                    measure_ours(opts.seconds, is_loaded, host_options)
+                )
+                if binary is None:
+                    continue
+                result = measure_c(binary, opts.seconds, is_loaded, host_options)
+                if result is not None:
+                    runs.setdefault(f"c_{label}", []).append(result)
+    for label, results in runs.items():
+        report[label] = results[0] if len(results) == 1 else results
+        if len(results) > 1:
+            report[f"{label}_spread"] = spread(results)
     if not opts.no_lcnc:
-        lcnc = measure_lcnc(opts.seconds, is_loaded=False)
+        cpu = rt_cpu(host_options)
+        lcnc = measure_lcnc(opts.seconds, is_loaded=False, cpu=cpu)
         if lcnc is not None:
             report["lcnc"] = lcnc
-            report["lcnc_loaded"] = measure_lcnc(opts.seconds, is_loaded=True)
+            report["lcnc_loaded"] = measure_lcnc(opts.seconds, is_loaded=True, cpu=cpu)
     print(json.dumps(report))
     return 0
 

@@ -25,6 +25,8 @@ def _rows(text: str) -> list[list[float]]:
         ("lcnc_oracle_limit3.hal", "lcnc_oracle_limit3_samples.txt", 1500),
         # stepgen in position mode, a fuller pid, logic and arithmetic components
         ("lcnc_oracle3.hal", "lcnc_oracle3_samples.txt", 1600),
+        # stepgen step types 0-14 and a user step type, reversing under dirdelay
+        ("lcnc_oracle_stepgen.hal", "lcnc_oracle_stepgen_samples.txt", 2400),
     ],
 )
 def test_components_match_linuxcnc_period_by_period(
