@@ -62,6 +62,10 @@ class OrientState(enum.IntEnum):
     FAULTED = 3
 
 
+# traj.queueFull is reported while fewer planner slots than this are free (like LinuxCNC's
+# TC_QUEUE_MARGIN), so moves task has already sent still fit (see task's MAX_MOTION_IN_FLIGHT)
+QUEUE_FULL_MARGIN = 200
+
 @dataclass
 class Spindle:
     """One spindle as motion drives it (the ``spindle.N.*`` pins, MOT-065)."""
@@ -971,7 +975,7 @@ class MotionController:
         traj.enabled = self.is_enabled
         traj.inpos = self.is_in_position
         traj.queue = self.tp.queue_depth
-        traj.queueFull = self.tp.is_full
+        traj.queueFull = self.tp.free_slots < QUEUE_FULL_MARGIN
         traj.id = self.tp.motion_id
         traj.paused = self.tp.is_paused
         traj.scale = self.tp.feed_scale

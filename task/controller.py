@@ -57,6 +57,9 @@ STATE = emc.EMC_TASK_STATE_ENUM
 EXEC = emc.EMC_TASK_EXEC_ENUM
 INTERP = emc.EMC_TASK_INTERP_ENUM
 READAHEAD = 50  # messages queued ahead of motion while reading a program
+# motion commands sent but not yet answered: motion reports its queue full while fewer than
+# its QUEUE_FULL_MARGIN (200) slots are free, so moves in flight always fit
+MAX_MOTION_IN_FLIGHT = 100
 BUSY_POLL_S = 0.001  # how often task looks at motion while a program or MDI runs
 
 
@@ -541,7 +544,9 @@ class Task:
             elif msg.KIND is MessageKind.OPERATOR:
                 self._write_error_channel(msg)
             elif is_motion_type(msg.TYPE):
-                if self.stat.motion.traj.queueFull:
+                motion = self.stat.motion
+                in_flight = self.last_motion_serial - motion.echo_serial_number
+                if motion.traj.queueFull or in_flight >= MAX_MOTION_IN_FLIGHT:
                     return
                 if _waits_for_motion(msg) and not self._is_everything_done():
                     return

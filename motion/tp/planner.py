@@ -60,6 +60,10 @@ REPLAN_BATCH = 16
 TOLERANCE_FRACTION = 0.25
 # Largest per-axis change of the unit tangent passed without stopping (about 3 degrees).
 KINK_MAX_JUMP = 0.05
+# G61 (exact path) passes a joint without stopping only when it is tangent as LinuxCNC's
+# planner judges it: turning the full speed's direction within one period needs at most this
+# fraction of each axis's acceleration (its default tangent kink ratio).
+TANGENT_KINK_RATIO = 0.1
 # Angle below which two lines count as collinear (no blend needed).
 COLLINEAR_ANGLE = 1e-7
 # Turns sharper than this (almost a reversal) are not blended: the joint stops instead.
@@ -71,8 +75,8 @@ CURVED_BLEND_TRIES = 8
 class TermCond(enum.IntEnum):
     """End-of-move behaviour (LinuxCNC TC_TERM_COND_*)."""
 
-    STOP = 1  # G61: come to rest at the end of the move
-    EXACT = 2  # G61.1: follow the path exactly; corners slow down to what they allow
+    STOP = 1  # G61.1 (exact stop): come to rest at the end of the move
+    EXACT = 2  # G61 (exact path): as STOP, except that tangent joints pass at speed
     BLEND = 3  # G64: blend corners within the tolerance
 
 
@@ -499,6 +503,8 @@ class TrajectoryPlanner:
                 index = min(index, self._link(arc))
                 prev_move.end_s = arc.s0 + arc.length
                 return index
+        if prev_move.term == TermCond.EXACT and not self._is_tangent(tail, piece):
+            return index  # G61 stops at every corner, however slight
         tail.exit_max = self._kink_speed(tail, piece)
         if tail.is_kink_end:  # the period crossing the joint keeps 1 - KINK_FRACTION
             tail.acc_tail = min(tail.acc_tail, tail.acc * (1.0 - KINK_FRACTION))
@@ -608,6 +614,14 @@ class TrajectoryPlanner:
         p1.trim_end(d1)
         p2.trim_start(d2)
         return arc
+
+    def _is_tangent(self, tail: Piece, piece: Piece) -> bool:
+        """LinuxCNC's tangency test: at the joint's top speed, the direction change within
+        one period needs at most TANGENT_KINK_RATIO of each axis's acceleration."""
+        jump = np.abs(piece.tangent(0.0) - tail.tangent(tail.length))
+        speed = min(tail.vplan, piece.vplan)
+        turning_acc = speed / self.cycle_time + piece.acc
+        return bool(np.all(jump * turning_acc <= TANGENT_KINK_RATIO * self._plan_acc))
 
     def _kink_speed(self, tail: Piece, piece: Piece) -> float:
         """Speed at an unblended junction. A corner (direction change above

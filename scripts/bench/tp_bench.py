@@ -74,10 +74,10 @@ def read_program(path: Path) -> list[dict]:
                     motion = int(num)
                 elif num in (17, 18, 19):
                     plane = int(num)
-                elif num == 61:
-                    term = TermCond.STOP
-                elif abs(num - 61.1) < 1e-6:
+                elif num == 61:  # exact path (LinuxCNC's canon: TC_TERM_COND_EXACT)
                     term = TermCond.EXACT
+                elif abs(num - 61.1) < 1e-6:  # exact stop
+                    term = TermCond.STOP
                 elif num == 64:
                     term, tolerance = TermCond.BLEND, 0.0
             elif letter == "P":
