@@ -4,11 +4,14 @@
 Prints one JSON object::
 
     {"short_moves": {"lines_per_s": ..., "rs274_lines_per_s": ..., ...},
-     "subroutines": {"lines_per_s": ..., "rs274_lines_per_s": ..., ...}}
+     "subroutines": {"lines_per_s": ..., "rs274_lines_per_s": ..., ...},
+     "oword_subs": {"lines_per_s": ..., "rs274_lines_per_s": ..., ...}}
 
 ``short_moves`` is a 50,000-line program of short G1 moves (``bigprog_50k.ngc`` from
 ``../shared/reference/programs`` when it is there, otherwise one generated like it);
-``subroutines`` is a loop that calls an O-word subroutine 5,000 times. Each figure is
+``subroutines`` is a loop that calls an O-word subroutine 5,000 times; ``oword_subs`` is the
+shared subroutine-heavy program ``oword_subs.ngc`` from the same folder (left out when it is
+not there): small, so its figure is mostly process start-up. Each figure is
 interpreted lines (every line read, loops counted as often as they run) divided by the median
 wall time of 3 runs of the whole command, process start included, as
 ``interp_throughput.sh`` measures rs274. ``rs274_lines_per_s`` appears only where
@@ -34,7 +37,9 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(REPO))
 
-REFERENCE = REPO.parent / "shared" / "reference" / "programs" / "bigprog_50k.ngc"
+REFERENCE_PROGRAMS = REPO.parent / "shared" / "reference" / "programs"
+REFERENCE = REFERENCE_PROGRAMS / "bigprog_50k.ngc"
+OWORD_SUBS = REFERENCE_PROGRAMS / "oword_subs.ngc"
 RS274 = "/usr/bin/rs274"
 TOOL_TABLE = "T1 P1 Z0.511 D3 ;3mm end mill\n"
 
@@ -152,6 +157,9 @@ def main(argv: list[str] | None = None) -> int:
             "short_moves": measure(short, folder, options.runs),
             "subroutines": measure(subs, folder, options.runs),
         }
+        if OWORD_SUBS.exists():
+            shutil.copy(OWORD_SUBS, folder / OWORD_SUBS.name)
+            report["oword_subs"] = measure(folder / OWORD_SUBS.name, folder, options.runs)
     print(json.dumps(report, indent=2))
     return 0
 

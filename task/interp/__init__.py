@@ -8,7 +8,8 @@ calls a canon (``canon.Canon``); ``canon.PrintingCanon`` prints the calls the wa
 interp     the Interpreter: init/open/read/execute/synch/exit, block checks,
            order of execution, comments, G-code mode changes, M2/M30
 reader     lexing a line into a Block: words, expressions, parameters, O-words
-compiled   expressions compiled to closures for lines read again (loops)
+compiled   expressions compiled to closures, and line plans, for lines read
+           again (loops, subroutines)
 block      the Block and the G/M code tables (modal groups)
 params     numbered and named parameters, the .var file
 owords     subroutines, calls, loops and conditionals
@@ -20,6 +21,7 @@ cycles     canned cycles G73/G74/G81..G89
 comp       cutter radius compensation
 g7x        lathe cycles G70..G72
 ldmath     LinuxCNC's long double and glibc arithmetic where it shows
+stack      LinuxCNC's error stack (function names) for rs274 -s
 ========== ==================================================================
 """
 

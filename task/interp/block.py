@@ -239,3 +239,14 @@ class Block:
     def __init__(self) -> None:
         self.g_modes = [-1] * 17
         self.m_modes = [-1] * 11
+
+
+class OWordBlock(Block):
+    """The block of an O-word line read by its plan: reading sets only O-word fields (and
+    the comment), so the G and M code tables are shared, read-only, not made per line."""
+
+    g_modes = (-1,) * 17  # type: ignore[assignment]
+    m_modes = (-1,) * 11  # type: ignore[assignment]
+
+    def __init__(self) -> None:
+        pass

@@ -3,7 +3,9 @@
     cnc rs274 [-t TOOL_TABLE] [-v VAR_FILE] [-i INI] [-b] [-s] [-g] [-n 0|1|2] [FILE [OUT]]
 
 Output goes to stdout (or OUT) in rs274's format; ``executing``, errors and the failing line go
-to stderr; the exit status is 0, or 1 after an interpreter error (with ``-n 2``, the default).
+to stderr (with ``-s``, followed by the error's stack of LinuxCNC function names, see
+``stack.py``); the exit status is 0, or 1 after an interpreter error (with ``-n 2``, the
+default).
 Without ``-g`` rs274's interactive menu is offered; without FILE lines are read from stdin.
 """
 
@@ -78,7 +80,9 @@ def _err(out: _Out, text: str) -> None:
 
 
 def _report(out: _Out, interp: Interpreter, error: InterpError) -> None:
-    _err(out, f"{error.message}\n{interp.linetext}\n")
+    # with -s the error's LinuxCNC function stack follows (empty otherwise)
+    stack = "".join(f"{name}\n" for name in error.stack)
+    _err(out, f"{error.message}\n{interp.linetext}\n{stack}")
 
 
 def _read_line(prompt: str) -> str | None:
@@ -126,7 +130,7 @@ def interpret_from_file(interp: Interpreter, out: _Out, do_next: int, block_dele
             continue
         if read_status == INTERP_ENDFILE:
             break
-        if read_status not in (INTERP_OK, INTERP_EXECUTE_FINISH):
+        if read_status != INTERP_OK and read_status != INTERP_EXECUTE_FINISH:
             _err(out, "File not open\n\n")
             if do_next == 2:
                 return 1
@@ -169,6 +173,7 @@ def main(argv: list[str]) -> int:
     tool_files: list[str] = []
     var_file = DEFAULT_VAR_FILE
     block_delete = False
+    print_stack = False
     do_next = 2
     go = False
     ini_path = None
@@ -180,6 +185,8 @@ def main(argv: list[str]) -> int:
             var_file = value
         elif opt == "-b":
             block_delete = not block_delete
+        elif opt == "-s":
+            print_stack = not print_stack
         elif opt == "-n":
             try:
                 do_next = int(value)
@@ -203,7 +210,9 @@ def main(argv: list[str]) -> int:
         stdout = out_file
     out = _Out(stdout)
     try:
-        status = _run(args, out, tool_files, var_file, block_delete, do_next, go, ini_path, task)
+        status = _run(
+            args, out, tool_files, var_file, block_delete, do_next, go, ini_path, task, print_stack
+        )
         out.flush()
         return status
     except BrokenPipeError:
@@ -218,7 +227,9 @@ def main(argv: list[str]) -> int:
             out_file.close()
 
 
-def _run(args, out, tool_files, var_file, block_delete, do_next, go, ini_path, task) -> int:
+def _run(
+    args, out, tool_files, var_file, block_delete, do_next, go, ini_path, task, print_stack
+) -> int:
     tools = ToolTable()
     loaded = False
     for name in tool_files:
@@ -239,6 +250,8 @@ def _run(args, out, tool_files, var_file, block_delete, do_next, go, ini_path, t
             _err(out, f"Unable to open inifile:{ini_path}:\n")
     canon = PrintingCanon(out.append, tools, out.flush)
     interp = Interpreter(canon, parameter_file=var_file, task=task)
+    if print_stack:
+        interp.record_error_stack()
     # rs274 builds its interpreter before it names the INI file, so the predefined
     # #<_metric_machine> never sees it (-1); the INI counts from init() on.
     interp.ini = ini

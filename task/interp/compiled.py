@@ -1,30 +1,49 @@
-"""Compiled values: expressions and parameter references turned into closures.
+"""Compiled values and line plans: what lines read again and again are read with.
 
 Loops and subroutines read the same lines again and again. The second time a value such as
 ``[#<r> * COS[#1]]`` is read at the same place of the same line, it is compiled once into a
-closure that evaluates it with the parameters of the moment; later reads just call it.
+Python function (from Python source generated for it) that evaluates it with the parameters
+of the moment; later reads just call it.
 
-A closure does exactly what ``ReaderMixin.read_real_value`` does, in the same order, with the
-same errors: operands are evaluated left to right and each operator as soon as its right
+A compiled value does exactly what ``ReaderMixin.read_real_value`` does, in the same order,
+with the same errors: operands are evaluated left to right and each operator as soon as its right
 operand is complete, which is the order of LinuxCNC's operator-precedence reader. Only
 syntax is decided at compile time; a value with a syntax error is never compiled (the
 interpreting reader then reports it at the right moment).
+
+A whole line read a second time gets a *plan* (see ``plan_line``): O-word lines, lines of
+parameter settings and ``G0``/``G1`` lines with computed axis values are then read without
+lexing them again, with their values compiled. LinuxCNC re-reads every line; so does the
+interpreter when a plan declines.
 """
 
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Callable
 
 from . import ldmath
+from .block import OWordBlock
 from .errors import InterpError
+from .params import PA_USE_LOOKUP
 from .reader import (
     _NUMBER_SPAN,
+    _O_KEYWORD,
+    _O_TYPES,
     _PLAIN_NUMBER,
     _PRECEDENCE,
     _VALID_NUMBER,
+    GE,
+    GT,
+    LE,
+    LT,
+    MINUS,
+    PLUS,
+    READONLY_PARAMETERS,
     RIGHT_BRACKET,
     RS274NGC_MAX_PARAMETERS,
+    TIMES,
     ReaderMixin,
     _execute_binary,
     _execute_unary,
@@ -39,69 +58,116 @@ class _SyntaxError(Exception):
     """The text cannot be compiled; the interpreting reader will handle it."""
 
 
-def _checked(fn: Thunk) -> Thunk:
-    """The NaN/infinity check read_real_value makes after every value."""
+def _not_finite(result: float) -> InterpError:
+    """The error of read_real_value's check for a NaN or an infinity."""
+    if result != result:
+        return InterpError("Calculation resulted in 'not a number'")
+    return InterpError("Calculation resulted in 'infinity'")
 
-    def value() -> float:
-        result = fn()
-        if result != result:
-            raise InterpError("Calculation resulted in 'not a number'")
-        if result in (math.inf, -math.inf):
-            raise InterpError("Calculation resulted in 'infinity'")
-        return result
 
-    return value
+def _fail(result: float) -> float:
+    raise _not_finite(result)
+
+
+# Python source for the common binary operations (the same arithmetic as _execute_binary;
+# the left operand is evaluated first, as the reader reads it); the others call it.
+_BINARY_CODE = {
+    PLUS: "({} + {})",
+    MINUS: "({} - {})",
+    TIMES: "({} * {})",
+    LT: "(1.0 if {} < {} else 0.0)",
+    GT: "(1.0 if {} > {} else 0.0)",
+    LE: "(1.0 if {} <= {} else 0.0)",
+    GE: "(1.0 if {} >= {} else 0.0)",
+}
+# unary operations that cannot fail, called directly (as _execute_unary does)
+_DIRECT_UNARY = {"sin": "_sin", "cos": "_cos", "tan": "_tan"}
 
 
 class Compiler:
-    """Compiles the values of one interpreter's lines (closures call back into it)."""
+    """Compiles the values of one interpreter's lines into Python functions.
+
+    Each value becomes the source of one Python expression, in the reader's order of
+    evaluation, compiled once into a function of no arguments. The NaN/infinity check
+    read_real_value makes after every value is inline (``_checked``); parameters are read
+    from the interpreter's table, named ones through small closures.
+    """
 
     def __init__(self, interp) -> None:
         self.interp = interp
+        self._namespace: dict = {
+            "_fail": _fail,
+            "_eb": _execute_binary,
+            "_eu": _execute_unary,
+            "_sin": ldmath.sin_deg,
+            "_cos": ldmath.cos_deg,
+            "_tan": ldmath.tan_deg,
+            "_r2d": ldmath.rad_to_deg,
+            "_atan2": math.atan2,
+            "P": interp.parameters,
+        }
+        self._temporaries = 0
 
     def value(self, line: str, counter: int) -> tuple[Thunk, int] | None:
+        """A value as read_real_value reads it, compiled; None if it cannot be."""
         try:
-            return self._value(line, counter)
-        except (_SyntaxError, InterpError, IndexError, ValueError):
+            code, counter = self._value(line, counter)
+            return self._function(code), counter
+        except (_SyntaxError, InterpError, IndexError, ValueError, SyntaxError, RecursionError):
             return None
 
     def expression(self, line: str, counter: int) -> tuple[Thunk, int] | None:
         """A bracketed expression as read_real_expression reads it (no NaN check)."""
         try:
-            return self._expression(line, counter)
-        except (_SyntaxError, InterpError, IndexError, ValueError):
+            code, counter = self._expression(line, counter)
+            return self._function(code), counter
+        except (_SyntaxError, InterpError, IndexError, ValueError, SyntaxError, RecursionError):
             return None
 
+    def _function(self, code: str) -> Thunk:
+        return eval("lambda: " + code, self._namespace)
+
+    def _bind(self, obj) -> str:
+        """A name in the compiled code's namespace for ``obj``."""
+        name = f"_f{len(self._namespace)}"
+        self._namespace[name] = obj
+        return name
+
+    def _checked(self, code: str) -> str:
+        """``code`` with read_real_value's NaN/infinity check (x - x is 0.0 unless x is a
+        NaN or an infinity)."""
+        self._temporaries += 1
+        t = f"_t{self._temporaries}"
+        return f"({t} if not (({t} := {code}) - {t}) else _fail({t}))"
+
     # ------------------------------------------------------------- grammar
-    def _value(self, line: str, counter: int) -> tuple[Thunk, int]:
+    def _value(self, line: str, counter: int) -> tuple[str, int]:
         match = _PLAIN_NUMBER.match(line, counter)
-        if match is not None:
-            number = float(match.group())
-            return (lambda: number), match.end()
+        if match is not None:  # read_real_value returns these unchecked
+            return _number(float(match.group())), match.end()
         if counter >= len(line):
             raise _SyntaxError
         c = line[counter]
         c1 = line[counter + 1] if counter + 1 < len(line) else ""
         if c == "[":
-            fn, counter = self._expression(line, counter)
+            code, counter = self._expression(line, counter)
         elif c == "#":
-            fn, counter = self._parameter(line, counter, False)
+            code, counter = self._parameter(line, counter, False)
         elif c in "+-" and c1 and not c1.isdigit() and c1 != ".":
             inner, counter = self._value(line, counter + 1)
-            fn = inner if c == "+" else (lambda: -inner())
+            code = inner if c == "+" else f"(-{inner})"
         elif "a" <= c <= "z":
-            fn, counter = self._unary(line, counter)
+            code, counter = self._unary(line, counter)
         else:
             span = _NUMBER_SPAN.match(line, counter)
             text = span.group()
             valid = _VALID_NUMBER.match(text)
             if valid is None or valid.end() != len(text):
                 raise _SyntaxError
-            number = float(text)
-            return (lambda: number), span.end()
-        return _checked(fn), counter
+            code, counter = _number(float(text)), span.end()
+        return self._checked(code), counter
 
-    def _expression(self, line: str, counter: int) -> tuple[Thunk, int]:
+    def _expression(self, line: str, counter: int) -> tuple[str, int]:
         counter += 1
         values = []
         operators = []
@@ -129,16 +195,25 @@ class Compiler:
                 break
         return values[0], counter
 
-    def _parameter(self, line: str, counter: int, check_exists: bool) -> tuple[Thunk, int]:
+    def _parameter(self, line: str, counter: int, check_exists: bool) -> tuple[str, int]:
         interp = self.interp
         counter += 1
         if counter < len(line) and line[counter] == "<":
             name, counter = ReaderMixin.read_name(line, counter)
             find = interp.find_named_param
             if check_exists:
-                return (lambda: 1.0 if find(name)[0] else 0.0), counter
+                return f"{self._bind(lambda: 1.0 if find(name)[0] else 0.0)}()", counter
+
+            contexts = interp.sub_context
+            is_global = name.startswith("_")
 
             def named() -> float:
+                # a plain stored parameter straight from its frame (find_named_param's
+                # common case); predefined, INI and HAL ones through find_named_param
+                level = 0 if is_global else interp.call_level
+                entry = contexts[level].named_params.get(name)
+                if entry is not None and not entry[1] & PA_USE_LOOKUP:
+                    return entry[0]
                 exists, value = find(name)
                 if exists:
                     return value
@@ -146,8 +221,12 @@ class Compiler:
                     return 0.0
                 raise InterpError(f"Named parameter #<{name}> not defined")
 
-            return named, counter
-        index_fn, counter = self._value(line, counter)
+            return f"{self._bind(named)}()", counter
+        index = _constant_index(line, counter)
+        index_code, counter = self._value(line, counter)
+        if index is not None and not check_exists and not 5420 <= index <= 5428:
+            return f"P[{index}]", counter  # the number's checks are done: it is valid
+        index_fn = self._function(index_code)
         pars = interp.parameters
         if check_exists:
 
@@ -155,7 +234,7 @@ class Compiler:
                 index = _integer(index_fn())
                 return float(1 <= index < RS274NGC_MAX_PARAMETERS)
 
-            return exists_numbered, counter
+            return f"{self._bind(exists_numbered)}()", counter
 
         def numbered() -> float:
             index = _integer(index_fn())
@@ -165,9 +244,9 @@ class Compiler:
                 raise InterpError("Cannot read current position with cutter radius compensation on")
             return pars[index]
 
-        return numbered, counter
+        return f"{self._bind(numbered)}()", counter
 
-    def _unary(self, line: str, counter: int) -> tuple[Thunk, int]:
+    def _unary(self, line: str, counter: int) -> tuple[str, int]:
         operation, counter = _read_operation_unary(line, counter)
         if counter >= len(line) or line[counter] != "[":
             raise _SyntaxError
@@ -175,10 +254,10 @@ class Compiler:
             counter += 1
             if counter >= len(line) or line[counter] != "#":
                 raise _SyntaxError
-            fn, counter = self._parameter(line, counter, True)
+            code, counter = self._parameter(line, counter, True)
             if counter >= len(line) or line[counter] != "]":
                 raise _SyntaxError
-            return fn, counter + 1
+            return code, counter + 1
         arg, counter = self._expression(line, counter)
         if operation == "atan":
             if counter >= len(line) or line[counter] != "/":
@@ -187,12 +266,39 @@ class Compiler:
             if counter >= len(line) or line[counter] != "[":
                 raise _SyntaxError
             arg2, counter = self._expression(line, counter)
-            return (lambda: ldmath.rad_to_deg(math.atan2(arg(), arg2()))), counter
-        return (lambda: _execute_unary(arg(), operation)), counter
+            return f"_r2d(_atan2({arg}, {arg2}))", counter
+        direct = _DIRECT_UNARY.get(operation)
+        if direct is not None:
+            return f"{direct}({arg})", counter
+        return f"_eu({arg}, {operation!r})", counter
 
 
-def _binary(left: Thunk, op: int, right: Thunk) -> Thunk:
-    return lambda: _execute_binary(left(), op, right())
+def _number(value: float) -> str:
+    """A number as Python source (repr() gives the same double back)."""
+    if value - value:  # an infinity (a number too long for a double)
+        return "1e999" if value > 0 else "-1e999"
+    return repr(value)
+
+
+def _binary(left: str, op: int, right: str) -> str:
+    code = _BINARY_CODE.get(op)
+    if code is not None:
+        return code.format(left, right)
+    return f"_eb({left}, {op}, {right})"
+
+
+def _constant_index(line: str, counter: int) -> int | None:
+    """The parameter number of ``#n`` when ``n`` is a plain valid number, else None."""
+    match = _PLAIN_NUMBER.match(line, counter)
+    if match is None:
+        return None
+    try:
+        index = _integer(float(match.group()))
+    except InterpError:
+        return None
+    if 1 <= index < RS274NGC_MAX_PARAMETERS:
+        return index
+    return None
 
 
 def _integer(value: float) -> int:
@@ -203,3 +309,204 @@ def _integer(value: float) -> int:
     elif value - ivalue > 0.0001:
         raise InterpError("Non integer value for integer")
     return _to_c_int(ivalue)
+
+
+# ===================================================================== line plans
+# A line read a second time (a loop body, a subroutine) is planned: what reading it takes
+# is worked out once, from its text, and replayed on later reads. Only lines whose reading
+# can be replayed exactly get a plan; a plan's read() declines (returns False) whenever the
+# state makes the general reader do anything else, and the line then takes the general path.
+
+_MOTION_HEAD = re.compile(r"(?:n\d+)?(?:g0*([01])(?![0-9.]))?(?=[xyzabc])")
+_PARAMETER_INDEX = re.compile(r"[0-9]+(?![0-9.])")
+_O_NUMBER = re.compile(r"o([0-9]+)(?![0-9.])")
+_AXES = "xyzabc"
+
+
+class LinePlan:
+    """The reading of one line of a file: its text, its downcased block text.
+
+    ``read(interp)`` either reads the line as the general reader would and returns True
+    (or raises its error), or declines (returns False) with the read position as it was,
+    for the general reader to read the line.
+    """
+
+    __slots__ = ("line", "text")
+
+    def __init__(self, text: str, line: str) -> None:
+        self.text = text
+        self.line = line
+
+    def read(self, interp) -> bool:
+        raise NotImplementedError
+
+
+class MotionPlan(LinePlan):
+    """``[N..] [G0|G1] X.. Y..`` with expressions: the fast path of plain motion lines
+    (``Interpreter._fast_read``) for values computed at each read."""
+
+    __slots__ = ("g", "values")
+
+    def __init__(self, text: str, line: str, g: str | None, values: list) -> None:
+        super().__init__(text, line)
+        self.g = g
+        self.values = values  # (axis index, thunk) in the order of the line
+
+    def read(self, interp) -> bool:
+        if interp._no_fast or interp.defining_sub or interp.skipping_o:
+            return False  # (skipped lines are not evaluated)
+        offset = interp.begin_planned_line(self)
+        # the values first, as the general reader reads them (their errors come first)
+        words = [None] * 6
+        for k, thunk in self.values:
+            words[k] = thunk()
+        if interp._fast_read(self.g, words):
+            return True
+        # the state wants the general path: it reads the line again (values have no
+        # side effects) from where this read started
+        interp.file_pos = offset
+        interp.sequence_number -= 1
+        return False
+
+
+class ParameterPlan(LinePlan):
+    """A line of nothing but parameter settings: ``#1 = [..]``, ``#<name> = [..]``."""
+
+    __slots__ = ("settings",)
+
+    def __init__(self, text: str, line: str, settings: list) -> None:
+        super().__init__(text, line)
+        self.settings = settings  # (name or None, index, thunk) in the order of the line
+
+    def read(self, interp) -> bool:
+        if interp._no_fast or interp.skipping_o or interp.defining_sub or interp.mdi_interrupt:
+            return False
+        interp.begin_planned_line(self)
+        numbered = interp.parameter_assignments
+        named = interp.named_parameter_assignments
+        for name, index, thunk in self.settings:
+            if name is None:
+                numbered.append((index, thunk()))
+            else:
+                interp.add_named_param(name)
+                named.append((name, thunk()))
+        interp._planned = (interp._fast_assign, None)
+        return True
+
+
+class OWordPlan(LinePlan):
+    """An O-word line: the O-word and its keyword are read once; the rest, which depends
+    on the state, is read by ``read_o_body`` each time."""
+
+    __slots__ = ("is_number", "name", "o_type", "position")
+
+    def __init__(
+        self, text: str, line: str, name: str, o_type: int, position: int, is_number: bool
+    ) -> None:
+        super().__init__(text, line)
+        self.name = name
+        self.o_type = o_type
+        self.position = position
+        self.is_number = is_number
+
+    def read(self, interp) -> bool:
+        offset = interp.begin_planned_line(self)
+        block = OWordBlock()
+        block.offset = offset
+        interp.block = block
+        if self.is_number:
+            interp._o_slots[0] = 0.0  # as reading the number does (see read_o)
+        block.o_type = self.o_type
+        line = self.line
+        counter = interp.read_o_body(line, self.position, block, self.name)
+        if not interp.skipping_o:
+            length = len(line)
+            while counter < length:  # read_items' check of what follows an O-word
+                ch = line[counter]
+                if ch == ";":
+                    counter = length
+                elif ch == "(":
+                    counter = interp.read_comment(line, counter, block)
+                else:
+                    raise InterpError("Unexpected character after O-word")
+        if not interp.mdi_interrupt:  # (an MDI interruption needs _execute's handling)
+            interp._planned = (interp.convert_control_functions, block)
+        return True
+
+
+def plan_line(compiler: Compiler, text: str, line: str) -> LinePlan | None:
+    """The plan for a line (``text`` as read, ``line`` downcased), or None."""
+    if not line or line[0] == "/":
+        return None
+    try:
+        if line[0] == "o":
+            return _plan_oword(text, line)
+        if line[0] == "#":
+            return _plan_parameters(compiler, text, line)
+        return _plan_motion(compiler, text, line)
+    except (_SyntaxError, InterpError, IndexError, ValueError):
+        return None
+
+
+def _plan_oword(text: str, line: str) -> OWordPlan | None:
+    if line.startswith("o<"):
+        name, counter = ReaderMixin.read_name(line, 1)
+        is_number = False
+    else:
+        match = _O_NUMBER.match(line)
+        if match is None or len(match.group(1)) > 9:
+            return None
+        name, counter = str(int(match.group(1))), match.end()
+        is_number = True
+    keyword = _O_KEYWORD.match(line, counter)
+    if keyword is None:
+        return None  # O_ and O_none lines depend on the INI or are errors
+    return OWordPlan(text, line, name, _O_TYPES[keyword.group()], keyword.end(), is_number)
+
+
+def _plan_parameters(compiler: Compiler, text: str, line: str) -> ParameterPlan | None:
+    settings = []
+    counter = 0
+    while counter < len(line):
+        if line[counter] != "#":
+            return None
+        counter += 1
+        if line[counter] == "<":
+            name, counter = ReaderMixin.read_name(line, counter)
+            index = 0
+        else:
+            match = _PARAMETER_INDEX.match(line, counter)
+            if match is None or len(match.group()) > 9:
+                return None
+            name, index, counter = None, int(match.group()), match.end()
+            if index < 1 or index >= RS274NGC_MAX_PARAMETERS or index in READONLY_PARAMETERS:
+                return None
+        if line[counter] != "=":
+            return None
+        compiled = compiler.value(line, counter + 1)
+        if compiled is None:
+            return None
+        thunk, counter = compiled
+        settings.append((name, index, thunk))
+    return ParameterPlan(text, line, settings)
+
+
+def _plan_motion(compiler: Compiler, text: str, line: str) -> MotionPlan | None:
+    head = _MOTION_HEAD.match(line)
+    if head is None:
+        return None
+    readers = compiler.interp._readers
+    values = []
+    seen = set()
+    counter = head.end()
+    while counter < len(line):
+        letter = line[counter]
+        if letter not in _AXES or letter in seen or letter not in readers:
+            return None
+        seen.add(letter)
+        compiled = compiler.value(line, counter + 1)
+        if compiled is None:
+            return None
+        thunk, counter = compiled
+        values.append((_AXES.index(letter), thunk))
+    return MotionPlan(text, line, head.group(1), values)

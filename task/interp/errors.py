@@ -17,6 +17,9 @@ class InterpError(Exception):
     def __init__(self, message: str) -> None:
         super().__init__(message)
         self.message = message
+        # LinuxCNC's function stack of the error, innermost first (filled in only when the
+        # interpreter records it: rs274 -s, see stack.py)
+        self.stack: list[str] = []
 
     def __str__(self) -> str:
         return self.message

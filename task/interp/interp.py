@@ -129,7 +129,7 @@ from .common import (
     round_to_int,
 )
 from .comp import QOTHER, CompMixin
-from .compiled import Compiler
+from .compiled import Compiler, LinePlan, plan_line
 from .cycles import CyclesMixin
 from .errors import (
     INTERP_ENDFILE,
@@ -145,6 +145,7 @@ from .offsets import OffsetsMixin
 from .owords import Context, OWordMixin
 from .params import ParamsMixin
 from .reader import _DOWNCASE, LINELEN, ReaderMixin, close_and_downcase
+from .stack import error_stack
 from .tools import ToolsMixin
 
 
@@ -203,8 +204,11 @@ class Interpreter(
         self.nurbs_order = 3
         self.endpoint = [0.0, 0.0]
         self.endpoint_valid = False
-        self._fast = None  # a line taken by the fast path: (motion, ends)
+        self._fast = None  # a motion line taken by the fast path: (motion, ends)
+        self._planned = None  # a line read by its plan: (its execute function, argument)
         self._no_fast = False
+        self._plans: dict[str, LinePlan] = {}  # raw line -> its plan (see compiled.py)
+        self.has_error_stack = False  # errors carry LinuxCNC's function stack (rs274 -s)
         self._file_cache: dict[str, list[str]] = {}
         self._compiled: dict = {}  # (line, position) -> compiled value (see compiled.py)
         self._compiler = Compiler(self)
@@ -213,8 +217,29 @@ class Interpreter(
     def _get_linetext(self) -> str:
         return self.linetext
 
+    def record_error_stack(self) -> None:
+        """Make errors carry LinuxCNC's function stack (``rs274 -s``, see stack.py).
+
+        Lines are then always read by the interpreting reader, never by compiled values or
+        line plans, so that an error's traceback has the shape of LinuxCNC's reader.
+        """
+        self.has_error_stack = True
+        self._compiled = _Uncached()
+        self._plans = _Uncached()
+
+    def _note_stack(self, error: InterpError) -> None:
+        if self.has_error_stack and not error.stack:
+            error.stack = error_stack(error.__traceback__, error.message)
+
     # ================================================================== init
     def init(self) -> int:
+        try:
+            return self._init()
+        except InterpError as error:
+            self._note_stack(error)
+            raise
+
+    def _init(self) -> int:
         self.tool_change_at_g30 = 0
         self.tool_change_quill_up = 0
         self.tool_change_with_spindle_on = 0
@@ -332,6 +357,7 @@ class Interpreter(
         self.selected_pocket = 0
         self.parameters[5599] = 1.0
         self._readers = self._make_readers(canon.GET_EXTERNAL_AXIS_MASK())
+        self._plans.clear()  # plans depend on the axes
         self.synch()
         self.init_tool_parameters()
         return INTERP_OK
@@ -549,6 +575,13 @@ class Interpreter(
         return lines
 
     def open(self, filename: str) -> int:
+        try:
+            return self._open(filename)
+        except InterpError as error:
+            self._note_stack(error)
+            raise
+
+    def _open(self, filename: str) -> int:
         if self.use_lazy_close and self.lazy_closing:
             self.use_lazy_close = False
             self.close()
@@ -603,7 +636,7 @@ class Interpreter(
         return INTERP_OK
 
     def reset(self) -> int:
-        self._fast = None
+        self._fast = self._planned = None
         self.call_state = 0
         self.linetext = ""
         self.blocktext = ""
@@ -621,27 +654,39 @@ class Interpreter(
     def read(self, command: str | None = None) -> int:
         try:
             return self._read(command)
-        except InterpError:
+        except InterpError as error:
+            self._note_stack(error)
             self.unwind_call()
             raise
 
     def _read(self, command: str | None) -> int:
-        self._fast = None  # a line read but never executed is dropped
+        self._fast = self._planned = None  # a line read but never executed is dropped
         lines = self.file_lines
+        raw = None
         if (
             command is None
             and lines is not None
             and self.file_pos < len(lines)
             and not (self.probe_flag or self.toolchange_flag or self.input_flag)
         ):
-            # the common case first: a plain motion line from the file (see _fast_read)
             raw = lines[self.file_pos]
+            # a line read before: its plan, if it has one (see compiled.py); programs
+            # without O-words have none, and do not pay for looking
+            plan = self._plans.get(raw) if self._plans else None
+            if plan is not None:
+                if plan.read(self):
+                    return INTERP_OK
+            # the common case first: a plain motion line from the file (see _fast_read)
             # (a comment, a NUL or anything unusual makes _FAST_LINE fail: general path)
-            if raw[:1] in _FAST_FIRST and len(raw) < LINELEN - 1:
+            elif raw[:1] in _FAST_FIRST and len(raw) < LINELEN - 1:
                 text = raw.rstrip(" \t\n\r\f\v")
                 line = text.translate(_DOWNCASE)
                 match = _FAST_LINE.match(line)
-                if match is not None and not self._no_fast and self._fast_read(match):
+                if (
+                    match is not None
+                    and not self._no_fast
+                    and self._fast_read(match.group(2), match.groups()[2:])
+                ):
                     canon = self.canon
                     pars = self.parameters
                     pars[5600] = canon.GET_EXTERNAL_TC_FAULT()
@@ -668,8 +713,16 @@ class Interpreter(
             raise
         if status == INTERP_OK:
             if self.line_length != 0:
+                if raw is not None and self.offset_map:
+                    # (only programs with O-words read lines again: the others never
+                    # fill the plan table)
+                    self._plan_line(raw)
                 match = _FAST_LINE.match(self.blocktext)
-                if match is not None and not self._no_fast and self._fast_read(match):
+                if (
+                    match is not None
+                    and not self._no_fast
+                    and self._fast_read(match.group(2), match.groups()[2:])
+                ):
                     return INTERP_OK
                 block = Block()
                 block.offset = offset
@@ -680,6 +733,32 @@ class Interpreter(
         elif status == INTERP_ENDFILE and self.skipping_o:
             raise InterpError(f"Failed to find sub 'O{self.skipping_o}' before EOF")
         return status
+
+    def _plan_line(self, raw: str) -> None:
+        """Plan a file line the second time it is read (the first read only notes it)."""
+        plans = self._plans
+        plan = plans.get(raw)
+        if plan is None:
+            plans[raw] = _SEEN_ONCE
+        elif plan is _SEEN_ONCE and "\x00" not in raw:
+            plans[raw] = plan_line(self._compiler, self.linetext, self.blocktext) or _NO_PLAN
+
+    def begin_planned_line(self, plan: LinePlan) -> int:
+        """What reading a line does before parsing it (read_inputs, read_text), for a line
+        taken by its plan; returns the line's position."""
+        canon = self.canon
+        pars = self.parameters
+        pars[5600] = canon.GET_EXTERNAL_TC_FAULT()
+        pars[5601] = canon.GET_EXTERNAL_TC_REASON()
+        pars[5420:5429] = self.current
+        offset = self.file_pos
+        self.file_pos = offset + 1
+        self.sequence_number += 1
+        self.linetext = plan.text
+        self.blocktext = plan.line
+        self.line_length = len(plan.line)
+        self.parameter_assignments = []
+        return offset
 
     def read_text(self, command: str | None) -> int:
         if command is None:
@@ -725,15 +804,16 @@ class Interpreter(
         return INTERP_OK
 
     # --------------------------------------------------------------- fast path
-    def _fast_read(self, match) -> bool:
-        """Take a plain ``[Nn] [G0|G1] X.. Y.. Z..`` line without building a Block.
+    def _fast_read(self, g: str | None, words) -> bool:
+        """Take a plain ``[Nn] [G0|G1] X.. Y.. Z..`` line without building a Block: its end
+        point, to move to when executed. ``words`` are the values of X Y Z A B C (numbers
+        or their text; None where the line has none).
 
         Only lines whose outcome is certain go this way (no error possible, no special
         state); everything else takes the general path, so the result is the same.
         """
         if self.skipping_o or self.cutter_comp_side or self.lathe_diameter_mode:
             return False
-        g = match.group(2)
         if g is None:
             move = self.motion_mode
             if move != G_0 and move != G_1:
@@ -742,7 +822,6 @@ class Interpreter(
             move = G_1 if g == "1" else G_0
         if move == G_1 and (self.feed_mode != UNITS_PER_MINUTE or self.feed_rate == 0.0):
             return False
-        words = match.groups()[2:]
         if (words[3] is not None or words[4] is not None or words[5] is not None) and (
             self.a_axis_wrapped
             or self.b_axis_wrapped
@@ -784,6 +863,17 @@ class Interpreter(
         self.current = ends
         return INTERP_OK
 
+    def _fast_assign(self, _unused: None) -> int:
+        """Execute a line of parameter settings taken by its plan (as _execute would)."""
+        pars = self.parameters
+        for index, value in self.parameter_assignments:
+            pars[index] = value
+        if self.named_parameter_assignments:
+            for name, value in self.named_parameter_assignments:
+                self.store_named_param(name, value)
+            self.named_parameter_assignments = []
+        return INTERP_OK
+
     def parse_line(self, line: str, block: Block) -> None:
         self.read_items(block, line)
         if not self.skipping_o:
@@ -796,7 +886,8 @@ class Interpreter(
             return self._fast_execute()
         try:
             return self._execute(command)
-        except InterpError:
+        except InterpError as error:
+            self._note_stack(error)
             self.unwind_call()
             raise
 
@@ -809,6 +900,10 @@ class Interpreter(
                 return status
         if self._fast is not None:
             return self._fast_execute()
+        planned = self._planned
+        if planned is not None:
+            self._planned = None
+            return planned[0](planned[1])
         block = self.block
         if block.o_name is not None or self.mdi_interrupt:
             status = self.convert_control_functions(block)
@@ -1640,6 +1735,24 @@ _FAST_LINE = re.compile(
     + r"\Z"
 )
 _EMPTY_BLOCK = Block()  # stands for blank lines; never executed
+
+
+class _Uncached(dict):
+    """A cache that keeps nothing: every line and value is read afresh."""
+
+    def __setitem__(self, key, value) -> None:
+        pass
+
+
+class _NoPlan(LinePlan):
+    """A line without a plan: read the general way."""
+
+    def read(self, interp) -> bool:
+        return False
+
+
+_SEEN_ONCE = _NoPlan("", "")  # read once so far
+_NO_PLAN = _NoPlan("", "")  # cannot be planned
 _FAST_FIRST = frozenset("nNgGxXyYzZaAbBcC")
 
 

@@ -40,6 +40,12 @@ from .block import (
 from .errors import INTERP_OK, InterpError
 
 INTERP_SUB_ROUTINE_LEVELS = 10
+# O-word types as convert_control_functions groups them (sets: checked on every O line)
+_SUB_STARTS = frozenset((O_sub, O_))
+_SUB_ENDS = frozenset((O_endsub, O_return, M_99))
+_CALLS = frozenset((O_call, M_98))
+_LOOP_TESTS = frozenset((O_repeat, O_while))
+_LOOP_ENDS = frozenset((O_endrepeat, O_endwhile))
 
 
 class Context:
@@ -71,11 +77,18 @@ class Context:
         self.m98_loop_counter = -1
         self.context_status = 0
         self.call_type = CT_NONE
-        self.saved_params = [0.0] * 30
+        # the saved_* sequences are replaced, never changed in place: share the zeros
+        self.saved_params = _NO_PARAMS
         self.named_params: dict[str, list] = {}
-        self.saved_g_codes = [0] * 17
-        self.saved_m_codes = [0] * 10
-        self.saved_settings = [0.0] * 5
+        self.saved_g_codes = _NO_G_CODES
+        self.saved_m_codes = _NO_M_CODES
+        self.saved_settings = _NO_SETTINGS
+
+
+_NO_PARAMS = (0.0,) * 30
+_NO_G_CODES = (0,) * 17
+_NO_M_CODES = (0,) * 10
+_NO_SETTINGS = (0.0,) * 5
 
 
 class _Offset:
@@ -209,7 +222,9 @@ class OWordMixin:
             self.sub_name = None
 
     def control_back_to(self, block: Block) -> None:
-        name = os.path.basename(block.o_name)
+        name = block.o_name
+        if "/" in name:
+            name = os.path.basename(name)
         op = self.offset_map.get(name)
         if op is not None:
             if self.filename and self.file_lines is None:
@@ -255,11 +270,15 @@ class OWordMixin:
             return INTERP_OK
         if otype == O_none:
             return INTERP_OK
-        if otype in (O_sub, O_):
+        if otype in _SUB_STARTS:
             frame = self.sub_context[self.call_level]
             if otype == O_ and frame.call_type not in (CT_NGC_M98_SUB, CT_NONE):
                 raise InterpError("Fanuc 'O....' subroutine must be called with 'M98'")
-            if otype == O_sub and frame.call_type not in (CT_NGC_OWORD_SUB, CT_NONE):
+            if (
+                otype == O_sub
+                and frame.call_type != CT_NGC_OWORD_SUB
+                and frame.call_type != CT_NONE
+            ):
                 raise InterpError("'O.... sub' subroutine must be called with 'O.... call'")
             if self.skipping_o:
                 self.control_save_offset(block)
@@ -275,7 +294,7 @@ class OWordMixin:
                 self.skipping_start = self.sequence_number
                 self.defining_sub = 1
                 self.sub_name = block.o_name
-        elif otype in (O_endsub, O_return, M_99):
+        elif otype in _SUB_ENDS:
             if otype == M_99 and self.call_level == 0:
                 raise InterpError(
                     "Bug:  Reached convert_control_functions() from M99 in main program"
@@ -287,12 +306,12 @@ class OWordMixin:
             frame = self.sub_context[self.call_level]
             if frame.call_type == CT_NGC_M98_SUB and otype != M_99:
                 raise InterpError("Fanuc 'O....' subroutine definition must end with 'M99'")
-            if frame.call_type == CT_NGC_OWORD_SUB and otype not in (O_endsub, O_return):
+            if frame.call_type == CT_NGC_OWORD_SUB and otype != O_endsub and otype != O_return:
                 raise InterpError(
                     "'O.... endsub' or 'O.... return' must follow 'O.... sub' subroutine definition"
                 )
             self.execute_return(frame, frame.call_type)
-        elif otype in (O_call, M_98):
+        elif otype in _CALLS:
             self.enter_context(block)
             frame = self.sub_context[self.call_level]
             self.execute_call(frame, frame.call_type)
@@ -300,7 +319,7 @@ class OWordMixin:
             self.skipping_o = None
             if block.o_name not in self.offset_map:
                 self.control_save_offset(block)
-        elif otype in (O_repeat, O_while):
+        elif otype in _LOOP_TESTS:
             op = self.offset_map.get(block.o_name)
             if op is not None:
                 if (
@@ -405,7 +424,7 @@ class OWordMixin:
                 self.skipping_o = block.o_name
                 self.skipping_start = self.sequence_number
                 self.doing_continue = 1
-        elif otype in (O_endrepeat, O_endwhile):
+        elif otype in _LOOP_ENDS:
             op = self._find_label(block)
             if op is not None and (
                 (otype == O_endrepeat and op.type != O_repeat)

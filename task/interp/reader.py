@@ -491,8 +491,14 @@ class ReaderMixin:
                     block.o_type = O_
                 else:
                     block.o_type = O_none
+        return self.read_o_body(line, counter, block, oname)
+
+    def read_o_body(self, line: str, counter: int, block: Block, oname: str) -> int:
+        """What follows the O-word and its keyword: the part of reading that depends on
+        the state (skipping, defining, call level), and the expressions."""
+        length = len(line)
         otype = block.o_type
-        if otype in (O_sub, O_, O_endsub, O_call, M_98, O_return, M_99):
+        if otype in _OWN_NAMES:
             block.o_name = oname
         else:
             if self.call_level:
@@ -502,10 +508,10 @@ class ReaderMixin:
             else:
                 sub_name = ""
             block.o_name = f"{sub_name}#{oname}"
-        if otype in (O_sub, O_):
+        if otype in _SUB_STARTS:
             if self.defining_sub == 1:
                 raise InterpError("Nested subroutine definition")
-        elif otype in (O_endsub, O_return, M_99):
+        elif otype in _SUB_ENDS:
             if self.skipping_o and self.skipping_o != block.o_name:
                 return counter
             if otype != M_99 and counter < length and line[counter] == "[":
@@ -536,14 +542,14 @@ class ReaderMixin:
         elif otype == M_98:
             block.param_cnt = 0
             block.call_type = CT_NGC_M98_SUB
-        elif otype in (O_while, O_repeat, O_if, O_elseif):
+        elif otype in _TESTS:
             if self.skipping_o and self.skipping_o != block.o_name:
                 return counter
             if counter >= length or line[counter] != "[":
                 raise InterpError(f"Left bracket missing after '{_O_NAMES[otype]}'")
             value, counter = self.read_expression_cached(line, counter)
             self.test_value = value
-        elif otype in (O_do, O_else, O_endif, O_break, O_continue, O_endwhile, O_endrepeat):
+        elif otype in _NO_ARGUMENTS:
             pass
         else:
             block.o_type = O_none
@@ -825,6 +831,12 @@ _O_KEYWORDS = [
 _O_KEYWORD = re.compile("|".join(word for word, _ in _O_KEYWORDS))
 _O_TYPES = dict(_O_KEYWORDS)
 _O_NAMES = {O_while: "while", O_repeat: "repeat", O_if: "if", O_elseif: "elseif"}
+# O-word types by what read_o_body does with them (sets, not tuples: read on every O line)
+_OWN_NAMES = frozenset((O_sub, O_, O_endsub, O_call, M_98, O_return, M_99))  # not sub-qualified
+_SUB_STARTS = frozenset((O_sub, O_))
+_SUB_ENDS = frozenset((O_endsub, O_return, M_99))
+_TESTS = frozenset((O_while, O_repeat, O_if, O_elseif))  # followed by [test]
+_NO_ARGUMENTS = frozenset((O_do, O_else, O_endif, O_break, O_continue, O_endwhile, O_endrepeat))
 
 
 def _to_c_int(value: float) -> int:

@@ -54,3 +54,38 @@ def test_known_deviations_name_real_programs() -> None:
     names = {p.name for folder in (CORPUS, PROGRAMS) for p in folder.glob("*.ngc")}
     unknown = set(_known_deviations()) - names
     assert not unknown, f"KNOWN_DEVIATIONS.txt names programs that do not exist: {unknown}"
+
+
+@pytest.fixture
+def every_line_planned(monkeypatch):
+    """Plan every line as its file is loaded, so that plans take even lines read once."""
+    from task.interp.compiled import plan_line
+    from task.interp.errors import InterpError
+    from task.interp.interp import Interpreter
+    from task.interp.reader import LINELEN, close_and_downcase
+
+    load = Interpreter._load_file
+
+    def load_and_plan(self, filename: str):
+        lines = load(self, filename)
+        for raw in lines or ():
+            if "\x00" in raw or len(raw) >= LINELEN - 1:
+                continue
+            text = raw.rstrip(" \t\n\r\f\v")
+            try:
+                line = close_and_downcase(text)
+            except InterpError:
+                continue
+            plan = plan_line(self._compiler, text, line)
+            if plan is not None:
+                self._plans[raw] = plan
+        return lines
+
+    monkeypatch.setattr(Interpreter, "_load_file", load_and_plan)
+
+
+@pytest.mark.parametrize("program", _programs())
+def test_program_matches_rs274_with_every_line_planned(program: Path, every_line_planned) -> None:
+    """Line plans (compiled.py) read a line exactly as the general reader does."""
+    problems = compare(program, program.parent)
+    assert not problems, "\n".join(problems)

@@ -170,3 +170,83 @@ def test_an_unexecuted_line_does_not_leak_into_the_next_command(tmp_path) -> Non
     assert interp.read() == INTERP_OK  # read, then abandoned (an abort, say)
     assert interp.execute("G0 Y7") == INTERP_OK
     assert calls(out)[-1].startswith("STRAIGHT_TRAVERSE(0.0000, 7.0000")
+
+
+LOOP = """o<step> sub
+  #<r> = [#2 * 0.5 + 10]
+  G1 X[#<r> * COS[#1]] Y[#<r> * SIN[#1]]
+  o<step> return [#<r>]
+o<step> endsub
+G21 F1000
+#1 = 0
+o100 while [#1 LT 4]
+  o<step> call [#1 * 0.72] [#1 MOD 7]
+  #1 = [#1 + 1]
+o100 endwhile
+M2
+"""
+
+
+def test_lines_read_again_get_plans(tmp_path) -> None:
+    """A loop body and a subroutine are read the general way twice, then by their plans."""
+    from task.interp.compiled import MotionPlan, OWordPlan, ParameterPlan
+
+    interp, out = make(tmp_path, LOOP)
+    assert run_all(interp)[-1] == INTERP_EXIT
+    kinds = {type(plan).__name__: plan for plan in interp._plans.values()}
+    assert {"MotionPlan", "ParameterPlan", "OWordPlan"} <= set(kinds)
+    planned = {plan.text.strip() for plan in interp._plans.values() if plan.line}
+    assert "G1 X[#<r> * COS[#1]] Y[#<r> * SIN[#1]]" in planned
+    assert isinstance(interp._plans["  #1 = [#1 + 1]\n"], ParameterPlan)
+    assert isinstance(interp._plans["o100 while [#1 LT 4]\n"], OWordPlan)
+    assert isinstance(interp._plans["  G1 X[#<r> * COS[#1]] Y[#<r> * SIN[#1]]\n"], MotionPlan)
+    assert len([line for line in calls(out) if line.startswith("STRAIGHT_FEED")]) == 4
+
+
+def test_an_error_in_a_planned_line_is_the_general_readers(tmp_path) -> None:
+    interp, _ = make(
+        tmp_path,
+        "#1 = 3\no1 while [#1 GT -1]\n  #2 = [10 / #1]\n  #1 = [#1 - 1]\no1 endwhile\nM2\n",
+    )
+    with pytest.raises(InterpError) as info:
+        run_all(interp)
+    assert str(info.value) == "Attempt to divide by zero"
+    assert interp.linetext == "  #2 = [10 / #1]"
+    assert interp.parameters[2] == 10.0
+    assert interp.call_level == 0
+
+
+def test_error_stack_is_recorded_only_when_asked(tmp_path) -> None:
+    program = "o<s> sub\n  G1 X[1 / #1] F10\no<s> endsub\no<s> call [0]\nM2\n"
+    interp, _ = make(tmp_path, program)
+    with pytest.raises(InterpError) as info:
+        run_all(interp)
+    assert info.value.stack == []
+    interp, _ = make(tmp_path, program)
+    interp.record_error_stack()
+    with pytest.raises(InterpError) as info:
+        run_all(interp)
+    assert info.value.stack == [
+        "int Interp::execute_binary1(double*, int, double*)",
+        "int Interp::execute_binary(double*, int, double*)",
+        "int Interp::read_real_expression(char*, int*, double*, double*)",
+        "int Interp::read_real_value(char*, int*, double*, double*)",
+        "int Interp::read_x(char*, int*, block_pointer, double*)",
+        "int Interp::read_one_item(char*, int*, block_pointer, double*)",
+        "int Interp::read_items(block_pointer, char*, double*)",
+        "int Interp::parse_line(char*, block_pointer, setup_pointer)",
+        "int Interp::_read(const char*)",
+    ]
+    assert not interp._plans  # the stack needs the interpreting reader's calls
+
+
+def test_error_stack_names_are_cut_at_79_characters(tmp_path) -> None:
+    interp, _ = make(tmp_path, "G21 G17\nG0 X0 Y0\nG2 X1 Y1 R0.1 F10\nM2\n")
+    interp.record_error_stack()
+    with pytest.raises(InterpError) as info:
+        run_all(interp)
+    assert info.value.stack[0] == (
+        "int Interp::arc_data_r(int, int, double, double, double, double, double, int, d"
+    )
+    assert all(len(name) <= 79 for name in info.value.stack)
+    assert info.value.stack[-1] == "int Interp::_execute(const char*)"
