@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import contextlib
 import os
-import tempfile
 from pathlib import Path
 
 
@@ -23,6 +22,8 @@ def atomic_write_text(
     if _has_content(target, text):
         return  # nothing changed: no write, no fsync (the interpreter saves at every synch)
     directory = target.parent if str(target.parent) else Path(".")
+    import tempfile  # here: it costs start-up time to every process that may write a file
+
     fd, tmp_name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=directory)
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as tmp:
@@ -50,6 +51,8 @@ def _has_content(target: Path, text: str) -> bool:
 
 
 def _copy_for_backup(source: Path, backup: Path) -> None:
+    import tempfile
+
     data = source.read_bytes()
     fd, tmp_name = tempfile.mkstemp(prefix=f".{backup.name}.", dir=backup.parent)
     with os.fdopen(fd, "wb") as tmp:
