@@ -71,6 +71,32 @@ class Run(enum.Enum):
     PROGRAM = 2
 
 
+class LineQueue(deque):
+    """What the interpreter queued for motion and iocontrol, each message with the program
+    line that made it (LinuxCNC's interp_list line numbers: stat.current_line)."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.lines: deque[int] = deque()
+        self.line = 0  # the line being interpreted: given to the messages appended now
+
+    def append(self, msg: emc.NMLmsg) -> None:
+        super().append(msg)
+        self.lines.append(self.line)
+
+    def popleft(self) -> emc.NMLmsg:
+        if self.lines:
+            self.lines.popleft()
+        return super().popleft()
+
+    def clear(self) -> None:
+        super().clear()
+        self.lines.clear()
+
+    def head_line(self) -> int:
+        return self.lines[0] if self.lines else self.line
+
+
 class Task:
     def __init__(self, ini: IniFile, nml: Nml, canon_factory: Callable | None = None) -> None:
         from task.canon import CanonSetup, TaskCanon
@@ -102,7 +128,8 @@ class Task:
             self.canon, ini=ini, parameter_file=self.setup.parameter_file, task=1
         )
         self.interp.init()
-        self.queue: deque[emc.NMLmsg] = self.canon.out
+        self.queue = self.canon.out = LineQueue()
+        self.current_line = 0  # the line of the message last taken from the queue
         self.mode = MODE.MANUAL
         self.state = STATE.ESTOP
         self.run = Run.IDLE
@@ -325,6 +352,7 @@ class Task:
         self.canon.set_status(self.stat)
         self.interp.synch()
         self.checked_motion_serial = self.last_motion_serial
+        self.queue.line = 0  # MDI lines have no line number in a file
         try:
             status = self.interp.execute(text)
             self.canon.FINISH()  # queue a move held back for naive-CAM joining (G64 Q)
@@ -342,6 +370,7 @@ class Task:
         self.interp.close()
         self.interp.open(cmd.file)
         self.file = cmd.file
+        self.current_line = 0
         return None
 
     def _close(self, _cmd: emc.NMLmsg) -> str | None:
@@ -481,6 +510,7 @@ class Task:
                         self.is_reading_done = True
                         break
                     is_skipped = self.interp.sequence_number < self.first_line
+                    self.queue.line = self.interp.sequence_number
                     status = self.interp.execute()
                     if self.is_stepping and not is_skipped and self.queue:
                         self.step_lines = 0  # one line that does something, per step
@@ -516,6 +546,7 @@ class Task:
             if now < self.delay_until:
                 return
             msg = self.queue[0]
+            self.current_line = self.queue.head_line()
             if isinstance(msg, emc.EMC_TRAJ_DELAY):
                 if not self._is_motion_done():
                     return
@@ -709,7 +740,7 @@ class Task:
         task.file = self.file[:255]
         task.callLevel = interp.call_level
         task.motionLine = self.stat.motion.traj.id
-        task.currentLine = self.stat.motion.traj.id
+        task.currentLine = self.current_line
         task.readLine = getattr(interp, "sequence_number", 0)
         task.queuedMDIcommands = len(self.mdi_queue)
         task.delayLeft = max(0.0, self.delay_until - time.monotonic())
