@@ -307,7 +307,7 @@ function update(changes) {
     loadProgram(s.file);
     if (isPreviewShown) loadPreview();
   }
-  highlightLine(s.current_line);
+  highlightLine(executingLine(s));
   draw();
 }
 
@@ -351,7 +351,12 @@ async function loadProgram(file) {
     item.textContent = line || " ";
     return item;
   }));
-  highlightLine(status.current_line);
+  highlightLine(executingLine(status));
+}
+
+// The line being cut, as AXIS shows it: motion's (current_line runs ahead, with readahead).
+function executingLine(s) {
+  return s.motion_line || s.current_line || 0;
 }
 
 let highlighted = 0;
@@ -555,7 +560,7 @@ function paint() {
     }
     g.stroke();
   }
-  const current = status.current_line || 0;
+  const current = executingLine(status);
   const isRunning = status.interp_state && status.interp_state !== "IDLE";
   let previous = [0, 0, 0];
   // Three passes, one per look: rapids (dashed), feeds to come, feeds already cut.
