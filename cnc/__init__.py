@@ -6,18 +6,42 @@ the task/launcher issue lands; the other packages are the processes:
 ``iocontrol``.
 """
 
-# The Python API (``import cnc as linuxcnc``, see cnc/README.md) is loaded on first use by
-# __getattr__ below, so that ``import cnc`` stays cheap. Only cnc.ini is set up now: the name
-# ``cnc.ini`` is the INI module, made callable as LinuxCNC's ``linuxcnc.ini`` class.
-from cnc import ini as _ini_module
-from cnc.api.inifile import make_callable as _make_callable
+import sys
+import types
 
-_make_callable(_ini_module)
+# The Python API (``import cnc as linuxcnc``, see cnc/README.md) is loaded on first use by
+# __getattr__ below, so that ``import cnc`` stays cheap (``cnc rs274`` starts in milliseconds).
+# The name ``cnc.ini`` is the INI module, made callable as LinuxCNC's ``linuxcnc.ini`` class;
+# it too is loaded on first use, and made callable however it is imported: the import system
+# binds a submodule to its package with setattr, which _Package intercepts.
+
+
+class _IniModule(types.ModuleType):
+    """The module ``cnc.ini``, which ``cnc.ini(path)`` also calls to open a file."""
+
+    def __call__(self, path: str) -> object:
+        from cnc.api.inifile import ini
+
+        return ini(path)
+
+
+class _Package(types.ModuleType):
+    def __setattr__(self, name: str, value: object) -> None:
+        if name == "ini" and isinstance(value, types.ModuleType):
+            value.__class__ = _IniModule
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Package
 
 
 def __getattr__(name: str) -> object:  # PEP 562: the API on first use
     if name.startswith("__"):  # probes such as __wrapped__: not API names
         raise AttributeError(f"module 'cnc' has no attribute '{name}'")
+    if name == "ini":
+        import importlib  # binds cnc.ini, made callable by _Package.__setattr__
+
+        return importlib.import_module("cnc.ini")
     from cnc.api import lookup
 
     value = lookup(name)

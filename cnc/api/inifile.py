@@ -1,14 +1,13 @@
 """``cnc.ini(path)``: LinuxCNC's ``linuxcnc.ini``, over ``cnc.ini.IniFile``.
 
-``cnc.ini`` is also the module that defines ``IniFile``; ``make_callable`` lets calling that
-module open a file the LinuxCNC way, so both ``cnc.ini("mill.ini").find("EMC", "MACHINE")``
-and ``from cnc.ini import IniFile`` work.
+``cnc.ini`` is also the module that defines ``IniFile``; the ``cnc`` package makes calling
+that module open a file the LinuxCNC way (see cnc/__init__.py), so both
+``cnc.ini("mill.ini").find("EMC", "MACHINE")`` and ``from cnc.ini import IniFile`` work.
 """
 
 from __future__ import annotations
 
 import os
-import types
 
 from cnc.api import error
 from cnc.ini import IniError, IniFile
@@ -31,15 +30,3 @@ class ini:  # LinuxCNC's name: linuxcnc.ini
     def findall(self, section: str, key: str) -> list[str]:
         """Every value of ``[section]key`` in file order (empty list if none)."""
         return self._file.findall(section, key)
-
-
-class _CallableIniModule(types.ModuleType):
-    """The module ``cnc.ini``, which ``cnc.ini(path)`` also calls to open a file."""
-
-    def __call__(self, path: str | os.PathLike[str]) -> ini:
-        return ini(path)
-
-
-def make_callable(module: types.ModuleType) -> None:
-    """Make ``module`` (``cnc.ini``) callable as LinuxCNC's ``linuxcnc.ini`` class."""
-    module.__class__ = _CallableIniModule

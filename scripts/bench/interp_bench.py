@@ -14,8 +14,9 @@ shared subroutine-heavy program ``oword_subs.ngc`` from the same folder (left ou
 not there): small, so its figure is mostly process start-up. Each figure is
 interpreted lines (every line read, loops counted as often as they run) divided by the median
 wall time of 3 runs of the whole command, process start included, as
-``interp_throughput.sh`` measures rs274. ``rs274_lines_per_s`` appears only where
-``/usr/bin/rs274`` exists. Usage: ``interp_bench.py [--runs N]``.
+``interp_throughput.sh`` measures rs274 (our runs and rs274's take turns).
+``rs274_lines_per_s`` appears only where ``/usr/bin/rs274`` exists.
+Usage: ``interp_bench.py [--runs N]``.
 """
 
 from __future__ import annotations
@@ -101,37 +102,38 @@ def count_lines(program: Path, folder: Path) -> int:
     return count
 
 
-def median_time(command: list[str], cwd: Path, runs: int) -> float:
-    times = []
+def median_times(commands: list[list[str]], cwd: Path, runs: int) -> list[float]:
+    """The median wall time of each command. Their runs take turns, so that a change in
+    the machine's load (other processes) weighs on each command alike."""
+    times: list[list[float]] = [[] for _ in commands]
     for _ in range(runs):
-        start = time.perf_counter()
-        subprocess.run(
-            command,
-            cwd=cwd,
-            stdout=subprocess.DEVNULL,
-            stderr=subprocess.DEVNULL,
-            stdin=subprocess.DEVNULL,
-            check=False,
-        )
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
+        for command, measured in zip(commands, times, strict=True):
+            start = time.perf_counter()
+            subprocess.run(
+                command,
+                cwd=cwd,
+                stdout=subprocess.DEVNULL,
+                stderr=subprocess.DEVNULL,
+                stdin=subprocess.DEVNULL,
+                check=False,
+            )
+            measured.append(time.perf_counter() - start)
+    return [statistics.median(measured) for measured in times]
 
 
 def measure(program: Path, folder: Path, runs: int) -> dict:
     lines = count_lines(program, folder)
     args = ["-g", "-t", "tool.tbl", "-v", "params.var", program.name]
-    ours = [sys.executable, "-m", "cnc", "rs274", *args]
-    env_note = {}
-    result = {"lines": lines}
-    seconds = median_time(ours, folder, runs)
-    result["seconds"] = round(seconds, 4)
-    result["lines_per_s"] = round(lines / seconds)
+    commands = [[sys.executable, "-m", "cnc", "rs274", *args]]
     if os.path.exists(RS274):
-        rs_seconds = median_time([RS274, *args], folder, runs)
-        result["rs274_seconds"] = round(rs_seconds, 4)
-        result["rs274_lines_per_s"] = round(lines / rs_seconds)
+        commands.append([RS274, *args])
+    seconds = median_times(commands, folder, runs)
+    result = {"lines": lines, "seconds": round(seconds[0], 4)}
+    result["lines_per_s"] = round(lines / seconds[0])
+    if len(seconds) > 1:
+        result["rs274_seconds"] = round(seconds[1], 4)
+        result["rs274_lines_per_s"] = round(lines / seconds[1])
         result["ratio"] = round(result["lines_per_s"] / result["rs274_lines_per_s"], 3)
-    result.update(env_note)
     return result
 
 

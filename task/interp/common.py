@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
 
+TYPE_CHECKING = False  # typing.TYPE_CHECKING, without typing's import time (see canon.py)
 if TYPE_CHECKING:
     from .block import Block
 

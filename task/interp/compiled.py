@@ -12,9 +12,9 @@ syntax is decided at compile time; a value with a syntax error is never compiled
 interpreting reader then reports it at the right moment).
 
 A whole line read a second time gets a *plan* (see ``plan_line``): O-word lines, lines of
-parameter settings and ``G0``/``G1`` lines with computed axis values are then read without
-lexing them again, with their values compiled. LinuxCNC re-reads every line; so does the
-interpreter when a plan declines.
+parameter settings and ``G0``/``G1`` lines with computed axis values (and an F word) are then
+read without lexing them again, with their values compiled. LinuxCNC re-reads every line; so
+does the interpreter when a plan declines.
 """
 
 from __future__ import annotations
@@ -24,18 +24,23 @@ import re
 from collections.abc import Callable
 
 from . import ldmath
-from .block import OWordBlock
+from .block import CT_NGC_OWORD_SUB, O_call, O_sub, OWordBlock
 from .errors import InterpError
 from .params import PA_USE_LOOKUP
 from .reader import (
+    _NO_ARGUMENTS,
     _NUMBER_SPAN,
     _O_KEYWORD,
     _O_TYPES,
+    _OWN_NAMES,
     _PLAIN_NUMBER,
     _PRECEDENCE,
+    _SUB_ENDS,
+    _TESTS,
     _VALID_NUMBER,
     GE,
     GT,
+    INTERP_SUB_PARAMS,
     LE,
     LT,
     MINUS,
@@ -107,25 +112,42 @@ class Compiler:
             "P": interp.parameters,
         }
         self._temporaries = 0
+        # Python's compile is slow, so nothing is compiled twice: what value() and
+        # expression() gave, by (line, counter, is_value) (a line's plan and the reader's
+        # own cache ask for the same values); the functions by their source (values such as
+        # ``#1`` or ``[2]`` come again and again, and temporaries are numbered per function);
+        # the names of the named parameters' readers in the namespace
+        self._done: dict[tuple[str, int, bool], tuple[Thunk, int] | None] = {}
+        self._functions: dict[str, Thunk] = {}
+        self._named: dict[str, str] = {}
 
     def value(self, line: str, counter: int) -> tuple[Thunk, int] | None:
         """A value as read_real_value reads it, compiled; None if it cannot be."""
-        try:
-            code, counter = self._value(line, counter)
-            return self._function(code), counter
-        except (_SyntaxError, InterpError, IndexError, ValueError, SyntaxError, RecursionError):
-            return None
+        key = (line, counter, True)
+        if key not in self._done:
+            self._done[key] = self._compiled(self._value, line, counter)
+        return self._done[key]
 
     def expression(self, line: str, counter: int) -> tuple[Thunk, int] | None:
         """A bracketed expression as read_real_expression reads it (no NaN check)."""
+        key = (line, counter, False)
+        if key not in self._done:
+            self._done[key] = self._compiled(self._expression, line, counter)
+        return self._done[key]
+
+    def _compiled(self, grammar, line: str, counter: int) -> tuple[Thunk, int] | None:
+        self._temporaries = 0  # (the temporaries are the compiled function's locals)
         try:
-            code, counter = self._expression(line, counter)
+            code, counter = grammar(line, counter)
             return self._function(code), counter
         except (_SyntaxError, InterpError, IndexError, ValueError, SyntaxError, RecursionError):
             return None
 
     def _function(self, code: str) -> Thunk:
-        return eval("lambda: " + code, self._namespace)
+        function = self._functions.get(code)
+        if function is None:
+            function = self._functions[code] = eval("lambda: " + code, self._namespace)
+        return function
 
     def _bind(self, obj) -> str:
         """A name in the compiled code's namespace for ``obj``."""
@@ -204,24 +226,10 @@ class Compiler:
             if check_exists:
                 return f"{self._bind(lambda: 1.0 if find(name)[0] else 0.0)}()", counter
 
-            contexts = interp.sub_context
-            is_global = name.startswith("_")
-
-            def named() -> float:
-                # a plain stored parameter straight from its frame (find_named_param's
-                # common case); predefined, INI and HAL ones through find_named_param
-                level = 0 if is_global else interp.call_level
-                entry = contexts[level].named_params.get(name)
-                if entry is not None and not entry[1] & PA_USE_LOOKUP:
-                    return entry[0]
-                exists, value = find(name)
-                if exists:
-                    return value
-                if interp.defining_sub:
-                    return 0.0
-                raise InterpError(f"Named parameter #<{name}> not defined")
-
-            return f"{self._bind(named)}()", counter
+            reader = self._named.get(name)
+            if reader is None:
+                reader = self._named[name] = self._bind(self._named_reader(name))
+            return f"{reader}()", counter
         index = _constant_index(line, counter)
         index_code, counter = self._value(line, counter)
         if index is not None and not check_exists and not 5420 <= index <= 5428:
@@ -245,6 +253,29 @@ class Compiler:
             return pars[index]
 
         return f"{self._bind(numbered)}()", counter
+
+    def _named_reader(self, name: str) -> Thunk:
+        """The value of ``#<name>``, as read_named_parameter reads it."""
+        interp = self.interp
+        find = interp.find_named_param
+        contexts = interp.sub_context
+        is_global = name.startswith("_")
+
+        def named() -> float:
+            # a plain stored parameter straight from its frame (find_named_param's common
+            # case); predefined, INI and HAL ones through find_named_param
+            level = 0 if is_global else interp.call_level
+            entry = contexts[level].named_params.get(name)
+            if entry is not None and not entry[1] & PA_USE_LOOKUP:
+                return entry[0]
+            exists, value = find(name)
+            if exists:
+                return value
+            if interp.defining_sub:
+                return 0.0
+            raise InterpError(f"Named parameter #<{name}> not defined")
+
+        return named
 
     def _unary(self, line: str, counter: int) -> tuple[str, int]:
         operation, counter = _read_operation_unary(line, counter)
@@ -342,15 +373,18 @@ class LinePlan:
 
 
 class MotionPlan(LinePlan):
-    """``[N..] [G0|G1] X.. Y..`` with expressions: the fast path of plain motion lines
+    """``[N..] [G0|G1] X.. Y.. [F..]`` with expressions: the fast path of plain motion lines
     (``Interpreter._fast_read``) for values computed at each read."""
 
-    __slots__ = ("g", "values")
+    __slots__ = ("feed", "g", "values")
 
-    def __init__(self, text: str, line: str, g: str | None, values: list) -> None:
+    def __init__(
+        self, text: str, line: str, g: str | None, values: list, feed: Thunk | None
+    ) -> None:
         super().__init__(text, line)
         self.g = g
         self.values = values  # (axis index, thunk) in the order of the line
+        self.feed = feed  # the F word's value, last on the line, if it has one
 
     def read(self, interp) -> bool:
         if interp._no_fast or interp.defining_sub or interp.skipping_o:
@@ -360,7 +394,9 @@ class MotionPlan(LinePlan):
         words = [None] * 6
         for k, thunk in self.values:
             words[k] = thunk()
-        if interp._fast_read(self.g, words):
+        feed = None if self.feed is None else self.feed()
+        # (a negative F is an error of the general reader's)
+        if (feed is None or feed >= 0.0) and interp._fast_read(self.g, words, feed):
             return True
         # the state wants the general path: it reads the line again (values have no
         # side effects) from where this read started
@@ -396,20 +432,84 @@ class ParameterPlan(LinePlan):
 
 class OWordPlan(LinePlan):
     """An O-word line: the O-word and its keyword are read once; the rest, which depends
-    on the state, is read by ``read_o_body`` each time."""
+    on the state, is read by ``read_o_body`` each time.
 
-    __slots__ = ("is_number", "name", "o_type", "position")
+    When the rest is nothing but the line's bracketed expressions (``thunks``, compiled),
+    the common state (no definition or skipping under way) takes a shorter path doing what
+    ``read_o_body`` does in that state: name the block, evaluate the expressions, store them.
+    """
+
+    __slots__ = ("execute", "is_number", "name", "names", "o_type", "position", "thunks")
 
     def __init__(
-        self, text: str, line: str, name: str, o_type: int, position: int, is_number: bool
+        self,
+        text: str,
+        line: str,
+        name: str,
+        o_type: int,
+        position: int,
+        is_number: bool,
+        thunks: tuple[Thunk, ...] | None,
+        execute: Callable,
     ) -> None:
         super().__init__(text, line)
         self.name = name
         self.o_type = o_type
         self.position = position
         self.is_number = is_number
+        self.thunks = thunks  # None: the line is always read by read_o_body
+        self.execute = execute  # what executing the line does when no skipping is under way
+        # sub name -> the name read_o_body gives the block (None: the O-word's own name)
+        self.names: dict[str, str] | None = None if o_type in _OWN_NAMES else {}
 
     def read(self, interp) -> bool:
+        if (
+            self.thunks is None
+            or interp.defining_sub
+            or interp.skipping_o
+            or interp.skipping_to_sub
+            or interp.mdi_interrupt
+        ):
+            return self._read_generally(interp)
+        offset = interp.begin_planned_line(self)
+        block = OWordBlock()
+        block.offset = offset
+        interp.block = block
+        slots = interp._o_slots
+        if self.is_number:
+            slots[0] = 0.0  # as reading the number does (see read_o)
+        otype = block.o_type = self.o_type
+        names = self.names
+        if names is None:
+            block.o_name = self.name
+        else:
+            level = interp.call_level
+            sub_name = (interp.sub_context[level].subName or "") if level else ""
+            o_name = names.get(sub_name)
+            if o_name is None:
+                o_name = names[sub_name] = f"{sub_name}#{self.name}"
+            block.o_name = o_name
+        values = []
+        for thunk in self.thunks:  # (each leaves its value in the shared slot)
+            value = slots[0] = thunk()
+            values.append(value)
+        if otype == O_call:
+            block.call_type = CT_NGC_OWORD_SUB
+            block.param_cnt = len(values)
+            block.params = values + [0.0] * (INTERP_SUB_PARAMS - len(values))
+        elif otype in _TESTS:
+            interp.test_value = values[0]
+        elif otype in _SUB_ENDS:
+            if values:
+                interp.return_value = values[0]
+                interp.value_returned = 1
+            else:
+                interp.return_value = 0.0
+                interp.value_returned = 0
+        interp._planned = (self.execute, block)  # (no skipping: see convert_control_functions)
+        return True
+
+    def _read_generally(self, interp) -> bool:
         offset = interp.begin_planned_line(self)
         block = OWordBlock()
         block.offset = offset
@@ -440,7 +540,7 @@ def plan_line(compiler: Compiler, text: str, line: str) -> LinePlan | None:
         return None
     try:
         if line[0] == "o":
-            return _plan_oword(text, line)
+            return _plan_oword(compiler, text, line)
         if line[0] == "#":
             return _plan_parameters(compiler, text, line)
         return _plan_motion(compiler, text, line)
@@ -448,7 +548,7 @@ def plan_line(compiler: Compiler, text: str, line: str) -> LinePlan | None:
         return None
 
 
-def _plan_oword(text: str, line: str) -> OWordPlan | None:
+def _plan_oword(compiler: Compiler, text: str, line: str) -> OWordPlan | None:
     if line.startswith("o<"):
         name, counter = ReaderMixin.read_name(line, 1)
         is_number = False
@@ -461,7 +561,39 @@ def _plan_oword(text: str, line: str) -> OWordPlan | None:
     keyword = _O_KEYWORD.match(line, counter)
     if keyword is None:
         return None  # O_ and O_none lines depend on the INI or are errors
-    return OWordPlan(text, line, name, _O_TYPES[keyword.group()], keyword.end(), is_number)
+    o_type = _O_TYPES[keyword.group()]
+    position = keyword.end()
+    thunks = _o_expressions(compiler, line, position, o_type)
+    execute = compiler.interp.control_function(o_type)
+    return OWordPlan(text, line, name, o_type, position, is_number, thunks, execute)
+
+
+def _o_expressions(
+    compiler: Compiler, line: str, counter: int, o_type: int
+) -> tuple[Thunk, ...] | None:
+    """The compiled expressions ending an O-word line of a type OWordPlan.read can read,
+    when nothing else follows them (no comment) and there are as many as read_o_body reads
+    without an error; else None."""
+    thunks = []
+    while counter < len(line) and line[counter] == "[":
+        compiled = compiler.expression(line, counter)
+        if compiled is None:
+            return None
+        thunk, counter = compiled
+        thunks.append(thunk)
+    if counter != len(line):
+        return None
+    if o_type == O_call:
+        is_readable = len(thunks) <= INTERP_SUB_PARAMS
+    elif o_type in _TESTS:
+        is_readable = len(thunks) == 1
+    elif o_type in _SUB_ENDS:
+        is_readable = len(thunks) <= 1
+    elif o_type == O_sub or o_type in _NO_ARGUMENTS:
+        is_readable = not thunks
+    else:
+        is_readable = False
+    return tuple(thunks) if is_readable else None
 
 
 def _plan_parameters(compiler: Compiler, text: str, line: str) -> ParameterPlan | None:
@@ -501,6 +633,11 @@ def _plan_motion(compiler: Compiler, text: str, line: str) -> MotionPlan | None:
     counter = head.end()
     while counter < len(line):
         letter = line[counter]
+        if letter == "f" and values:
+            compiled = compiler.value(line, counter + 1)
+            if compiled is None or compiled[1] != len(line):
+                return None  # (F, when there is one, comes last)
+            return MotionPlan(text, line, head.group(1), values, compiled[0])
         if letter not in _AXES or letter in seen or letter not in readers:
             return None
         seen.add(letter)
@@ -509,4 +646,4 @@ def _plan_motion(compiler: Compiler, text: str, line: str) -> MotionPlan | None:
             return None
         thunk, counter = compiled
         values.append((_AXES.index(letter), thunk))
-    return MotionPlan(text, line, head.group(1), values)
+    return MotionPlan(text, line, head.group(1), values, None)

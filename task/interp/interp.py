@@ -144,7 +144,7 @@ from .motion import MotionMixin
 from .offsets import OffsetsMixin
 from .owords import Context, OWordMixin
 from .params import ParamsMixin
-from .reader import _DOWNCASE, LINELEN, ReaderMixin, close_and_downcase
+from .reader import LINELEN, ReaderMixin, close_and_downcase, downcase
 from .stack import error_stack
 from .tools import ToolsMixin
 
@@ -204,7 +204,7 @@ class Interpreter(
         self.nurbs_order = 3
         self.endpoint = [0.0, 0.0]
         self.endpoint_valid = False
-        self._fast = None  # a motion line taken by the fast path: (motion, ends)
+        self._fast = None  # a motion line taken by the fast path: (motion, ends, feed)
         self._planned = None  # a line read by its plan: (its execute function, argument)
         self._no_fast = False
         self._plans: dict[str, LinePlan] = {}  # raw line -> its plan (see compiled.py)
@@ -653,13 +653,30 @@ class Interpreter(
     # ================================================================= read
     def read(self, command: str | None = None) -> int:
         try:
+            lines = self.file_lines
+            if (
+                command is None
+                and self._plans  # (programs without O-words have none)
+                and lines is not None
+                and self.file_pos < len(lines)
+                and not (self.probe_flag or self.toolchange_flag or self.input_flag)
+            ):
+                # a line read before: its plan, if it has one (see compiled.py); here, not
+                # in _read, as loops read little else (a Python call less for each line)
+                plan = self._plans.get(lines[self.file_pos])
+                if plan is not None:
+                    self._fast = self._planned = None
+                    if plan.read(self):
+                        return INTERP_OK
+                    return self._read(command, has_plan=True)
             return self._read(command)
         except InterpError as error:
             self._note_stack(error)
             self.unwind_call()
             raise
 
-    def _read(self, command: str | None) -> int:
+    def _read(self, command: str | None, has_plan: bool = False) -> int:
+        """Read a line (``has_plan``: the line's plan declined to read it)."""
         self._fast = self._planned = None  # a line read but never executed is dropped
         lines = self.file_lines
         raw = None
@@ -670,17 +687,11 @@ class Interpreter(
             and not (self.probe_flag or self.toolchange_flag or self.input_flag)
         ):
             raw = lines[self.file_pos]
-            # a line read before: its plan, if it has one (see compiled.py); programs
-            # without O-words have none, and do not pay for looking
-            plan = self._plans.get(raw) if self._plans else None
-            if plan is not None:
-                if plan.read(self):
-                    return INTERP_OK
             # the common case first: a plain motion line from the file (see _fast_read)
             # (a comment, a NUL or anything unusual makes _FAST_LINE fail: general path)
-            elif raw[:1] in _FAST_FIRST and len(raw) < LINELEN - 1:
+            if not has_plan and raw[:1] in _FAST_FIRST and len(raw) < LINELEN - 1:
                 text = raw.rstrip(" \t\n\r\f\v")
-                line = text.translate(_DOWNCASE)
+                line = downcase(text)
                 match = _FAST_LINE.match(line)
                 if (
                     match is not None
@@ -786,7 +797,7 @@ class Interpreter(
             if "(" in raw or ";" in raw or "\n" in raw:
                 line = close_and_downcase(raw)
             else:
-                line = raw.translate(_DOWNCASE)
+                line = downcase(raw)
             if line == "%" and self.percent_flag:
                 self.canon.FINISH()
                 return INTERP_ENDFILE
@@ -804,10 +815,11 @@ class Interpreter(
         return INTERP_OK
 
     # --------------------------------------------------------------- fast path
-    def _fast_read(self, g: str | None, words) -> bool:
-        """Take a plain ``[Nn] [G0|G1] X.. Y.. Z..`` line without building a Block: its end
-        point, to move to when executed. ``words`` are the values of X Y Z A B C (numbers
-        or their text; None where the line has none).
+    def _fast_read(self, g: str | None, words, feed: float | None = None) -> bool:
+        """Take a plain ``[Nn] [G0|G1] X.. Y.. Z.. [F..]`` line without building a Block:
+        its end point, to move to when executed. ``words`` are the values of X Y Z A B C
+        (numbers or their text; None where the line has none); ``feed`` the F word's value
+        (not negative), if the line has one.
 
         Only lines whose outcome is certain go this way (no error possible, no special
         state); everything else takes the general path, so the result is the same.
@@ -820,7 +832,10 @@ class Interpreter(
                 return False
         else:
             move = G_1 if g == "1" else G_0
-        if move == G_1 and (self.feed_mode != UNITS_PER_MINUTE or self.feed_rate == 0.0):
+        if feed is None:
+            if move == G_1 and (self.feed_mode != UNITS_PER_MINUTE or self.feed_rate == 0.0):
+                return False
+        elif self.feed_mode != UNITS_PER_MINUTE or (move == G_1 and feed == 0.0):
             return False
         if (words[3] is not None or words[4] is not None or words[5] is not None) and (
             self.a_axis_wrapped
@@ -847,12 +862,15 @@ class Interpreter(
             for k, word in enumerate(words):
                 if word is not None:
                     ends[k] += float(word)
-        self._fast = (move, ends)
+        self._fast = (move, ends, feed)
         return True
 
     def _fast_execute(self) -> int:
-        move, ends = self._fast
+        move, ends, feed = self._fast
         self._fast = None
+        if feed is not None:  # (as execute_block sets it, before the motion)
+            self.feed_rate = feed
+            self._enq("SET_FEED_RATE", feed)
         self.cycle_il_flag = False
         self.arc_not_allowed = False
         self.motion_mode = move
@@ -882,8 +900,19 @@ class Interpreter(
 
     # ================================================================ execute
     def execute(self, command: str | None = None) -> int:
-        if self._fast is not None and command is None:
-            return self._fast_execute()
+        if command is None:
+            # a line taken by the fast path or by its plan: straight to its execution
+            if self._fast is not None:
+                return self._fast_execute()
+            planned = self._planned
+            if planned is not None:
+                self._planned = None
+                try:
+                    return planned[0](planned[1])
+                except InterpError as error:
+                    self._note_stack(error)
+                    self.unwind_call()
+                    raise
         try:
             return self._execute(command)
         except InterpError as error:

@@ -264,33 +264,50 @@ def _libm_call(name: str):
     return call
 
 
-_calls: dict[str, Callable[[bytes], float]] = {}
+# Degree conversions and results already computed, by argument: loops and subroutines take
+# the same angles again and again, and SIN[a] and COS[a] of the same ``a`` often go together.
+# A cached value is the very result of the call it saves. Zeros, infinities and NaNs are never
+# cached (0.0 and -0.0 are the same key). Each table is emptied when it grows too large.
+_CACHE_SIZE = 4096
+_images: dict[float, bytes] = {}
+_calls: dict[str, Callable[[bytes], float]] = {}  # libm's functions, loaded on first use
 
 
-def _trig_deg(name: str, degrees: float) -> float:
-    call = _calls.get(name)
-    if call is None:
-        call = _calls[name] = _libm_call(name)
-    if degrees - degrees or not degrees:
-        # an infinity or a NaN (sinl gives a NaN; the caller reports it), or a zero,
-        # whose sign _radians does not keep
-        if degrees:
-            return math.nan
-        return call(ld(degrees).to_bytes())
-    return call(_radians(degrees))
+def _trig_function(name: str) -> Callable[[float], float]:
+    """``name((x * M_PIl) / 180.0)`` with C++'s long double overload, for degrees ``x``."""
+    results: dict[float, float] = {}
+
+    def trig_deg(degrees: float) -> float:
+        result = results.get(degrees)
+        if result is not None:
+            return result
+        call = _calls.get(name)
+        if call is None:
+            call = _calls[name] = _libm_call(name)
+        if degrees - degrees or not degrees:
+            # an infinity or a NaN (sinl gives a NaN; the caller reports it), or a zero,
+            # whose sign _radians does not keep
+            if degrees:
+                return math.nan
+            return call(ld(degrees).to_bytes())
+        image = _images.get(degrees)
+        if image is None:
+            if len(_images) >= _CACHE_SIZE:
+                _images.clear()
+            image = _images[degrees] = _radians(degrees)
+        result = call(image)
+        if len(results) >= _CACHE_SIZE:
+            results.clear()
+        results[degrees] = result
+        return result
+
+    trig_deg.__name__ = name[:-1] + "_deg"
+    return trig_deg
 
 
-def sin_deg(degrees: float) -> float:
-    """``sin((x * M_PIl) / 180.0)`` with C++'s long double overload."""
-    return _trig_deg("sinl", degrees)
-
-
-def cos_deg(degrees: float) -> float:
-    return _trig_deg("cosl", degrees)
-
-
-def tan_deg(degrees: float) -> float:
-    return _trig_deg("tanl", degrees)
+sin_deg = _trig_function("sinl")
+cos_deg = _trig_function("cosl")
+tan_deg = _trig_function("tanl")
 
 
 def sinl(value: LongDouble) -> float:

@@ -10,6 +10,7 @@ SUBROUTINE_PATH.
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 
 from .block import (
     CT_NGC_M98_SUB,
@@ -263,188 +264,225 @@ class OWordMixin:
         return None
 
     def convert_control_functions(self, block: Block) -> int:
+        """Execute an O-word line: nothing while skipping to another O-word or to a
+        subroutine's definition, else what its type does (``control_function``)."""
         otype = block.o_type
         if self.skipping_o and self.skipping_o != block.o_name:
             return INTERP_OK
         if self.skipping_to_sub and otype != O_sub and otype != O_:
             return INTERP_OK
-        if otype == O_none:
+        function = _CONTROL_FUNCTIONS.get(otype)
+        if function is None:
+            raise InterpError("Unknown control command in o word")
+        return function(self, block)
+
+    def control_function(self, otype: int) -> Callable[[Block], int]:
+        """What convert_control_functions does with a line of type ``otype`` when no
+        skipping is under way (for line plans, which know that when they read a line)."""
+        return getattr(self, _CONTROL_FUNCTIONS[otype].__name__)
+
+    def _control_none(self, block: Block) -> int:
+        return INTERP_OK
+
+    def _control_sub_start(self, block: Block) -> int:
+        """``O.. sub`` and Fanuc's bare ``O..``: a definition, or a called sub's start"""
+        otype = block.o_type
+        frame = self.sub_context[self.call_level]
+        if otype == O_ and frame.call_type not in (CT_NGC_M98_SUB, CT_NONE):
+            raise InterpError("Fanuc 'O....' subroutine must be called with 'M98'")
+        if otype == O_sub and frame.call_type != CT_NGC_OWORD_SUB and frame.call_type != CT_NONE:
+            raise InterpError("'O.... sub' subroutine must be called with 'O.... call'")
+        if self.skipping_o:
+            self.control_save_offset(block)
+            self.skipping_o = None
+        self.skipping_to_sub = None
+        if otype == O_:
             return INTERP_OK
-        if otype in _SUB_STARTS:
-            frame = self.sub_context[self.call_level]
-            if otype == O_ and frame.call_type not in (CT_NGC_M98_SUB, CT_NONE):
-                raise InterpError("Fanuc 'O....' subroutine must be called with 'M98'")
+        if self.call_level == 0:
+            if self.defining_sub == 1:
+                raise InterpError("Nested subroutine definition")
+            self.control_save_offset(block)
+            self.skipping_o = block.o_name
+            self.skipping_start = self.sequence_number
+            self.defining_sub = 1
+            self.sub_name = block.o_name
+        return INTERP_OK
+
+    def _control_sub_end(self, block: Block) -> int:
+        """``endsub``, ``return``, ``M99``: back to the caller, or the end of a definition"""
+        otype = block.o_type
+        if otype == M_99 and self.call_level == 0:
+            raise InterpError("Bug:  Reached convert_control_functions() from M99 in main program")
+        if self.call_level == 0 and self.sub_name is None:
+            self._oerr(f"{self.sequence_number}: not in a subroutine definition: '{self.linetext}'")
+        frame = self.sub_context[self.call_level]
+        if frame.call_type == CT_NGC_M98_SUB and otype != M_99:
+            raise InterpError("Fanuc 'O....' subroutine definition must end with 'M99'")
+        if frame.call_type == CT_NGC_OWORD_SUB and otype != O_endsub and otype != O_return:
+            raise InterpError(
+                "'O.... endsub' or 'O.... return' must follow 'O.... sub' subroutine definition"
+            )
+        self.execute_return(frame, frame.call_type)
+        return INTERP_OK
+
+    def _control_call(self, block: Block) -> int:
+        """``call`` and ``M98``"""
+        self.enter_context(block)
+        frame = self.sub_context[self.call_level]
+        self.execute_call(frame, frame.call_type)
+        return INTERP_OK
+
+    def _control_do(self, block: Block) -> int:
+        """``do``"""
+        self.skipping_o = None
+        if block.o_name not in self.offset_map:
+            self.control_save_offset(block)
+        return INTERP_OK
+
+    def _control_loop_test(self, block: Block) -> int:
+        """``while`` (of a while loop or ending a do loop) and ``repeat``"""
+        otype = block.o_type
+        op = self.offset_map.get(block.o_name)
+        if op is not None:
             if (
-                otype == O_sub
-                and frame.call_type != CT_NGC_OWORD_SUB
-                and frame.call_type != CT_NONE
-            ):
-                raise InterpError("'O.... sub' subroutine must be called with 'O.... call'")
-            if self.skipping_o:
-                self.control_save_offset(block)
-                self.skipping_o = None
-            self.skipping_to_sub = None
-            if otype == O_:
-                return INTERP_OK
-            if self.call_level == 0:
-                if self.defining_sub == 1:
-                    raise InterpError("Nested subroutine definition")
-                self.control_save_offset(block)
-                self.skipping_o = block.o_name
-                self.skipping_start = self.sequence_number
-                self.defining_sub = 1
-                self.sub_name = block.o_name
-        elif otype in _SUB_ENDS:
-            if otype == M_99 and self.call_level == 0:
-                raise InterpError(
-                    "Bug:  Reached convert_control_functions() from M99 in main program"
-                )
-            if self.call_level == 0 and self.sub_name is None:
+                otype == O_repeat or op.type != O_do
+            ) and self.sequence_number != op.sequence_number + 1:
                 self._oerr(
-                    f"{self.sequence_number}: not in a subroutine definition: '{self.linetext}'"
+                    f"{self.sequence_number}: duplicate O-word label: "
+                    f"'{self.linetext}' - defined in line {op.sequence_number + 1}"
                 )
-            frame = self.sub_context[self.call_level]
-            if frame.call_type == CT_NGC_M98_SUB and otype != M_99:
-                raise InterpError("Fanuc 'O....' subroutine definition must end with 'M99'")
-            if frame.call_type == CT_NGC_OWORD_SUB and otype != O_endsub and otype != O_return:
-                raise InterpError(
-                    "'O.... endsub' or 'O.... return' must follow 'O.... sub' subroutine definition"
-                )
-            self.execute_return(frame, frame.call_type)
-        elif otype in _CALLS:
-            self.enter_context(block)
-            frame = self.sub_context[self.call_level]
-            self.execute_call(frame, frame.call_type)
-        elif otype == O_do:
-            self.skipping_o = None
-            if block.o_name not in self.offset_map:
+        else:
+            self.control_save_offset(block)
+        self.skipping_o = None
+        op = self.offset_map.get(block.o_name)
+        if op is None or op.type == otype:
+            if op is None:
                 self.control_save_offset(block)
-        elif otype in _LOOP_TESTS:
-            op = self.offset_map.get(block.o_name)
-            if op is not None:
-                if (
-                    otype == O_repeat or op.type != O_do
-                ) and self.sequence_number != op.sequence_number + 1:
-                    self._oerr(
-                        f"{self.sequence_number}: duplicate O-word label: "
-                        f"'{self.linetext}' - defined in line {op.sequence_number + 1}"
-                    )
-            else:
-                self.control_save_offset(block)
-            self.skipping_o = None
-            op = self.offset_map.get(block.o_name)
-            if op is None or op.type == otype:
-                if op is None:
-                    self.control_save_offset(block)
-                    op = self.offset_map[block.o_name]
-                if otype == O_repeat:
-                    if op.repeat_count == -1:
-                        op.repeat_count = round(self.test_value)
-                    if op.repeat_count > 0:
-                        op.repeat_count -= 1
-                    else:
-                        self.skipping_o = block.o_name
-                        self.skipping_start = self.sequence_number
-                        op.repeat_count = -1
-                elif self.test_value == 0.0:
+                op = self.offset_map[block.o_name]
+            if otype == O_repeat:
+                if op.repeat_count == -1:
+                    op.repeat_count = round(self.test_value)
+                if op.repeat_count > 0:
+                    op.repeat_count -= 1
+                else:
                     self.skipping_o = block.o_name
                     self.skipping_start = self.sequence_number
-            elif otype == O_while:  # the 'while' of a do/while
-                if self.test_value != 0.0 and not self.doing_break:
-                    self.control_back_to(block)
-                else:
-                    self.doing_break = 0
-        elif otype == O_if:
-            op = self.offset_map.get(block.o_name)
-            if op is not None:
-                if self.sequence_number != op.sequence_number + 1:
-                    self._oerr(
-                        f"{self.sequence_number}: duplicate O-word label - already "
-                        f"defined in line {op.sequence_number + 1}: '{self.linetext}'"
-                    )
+                    op.repeat_count = -1
+            elif self.test_value == 0.0:
+                self.skipping_o = block.o_name
+                self.skipping_start = self.sequence_number
+        elif otype == O_while:  # the 'while' of a do/while
+            if self.test_value != 0.0 and not self.doing_break:
+                self.control_back_to(block)
             else:
-                self.control_save_offset(block)
+                self.doing_break = 0
+        return INTERP_OK
+
+    def _control_if(self, block: Block) -> int:
+        """``if``"""
+        op = self.offset_map.get(block.o_name)
+        if op is not None:
+            if self.sequence_number != op.sequence_number + 1:
+                self._oerr(
+                    f"{self.sequence_number}: duplicate O-word label - already "
+                    f"defined in line {op.sequence_number + 1}: '{self.linetext}'"
+                )
+        else:
+            self.control_save_offset(block)
+        if self.test_value != 0.0:
+            self.skipping_o = None
+            self.executed_if = 1
+        else:
+            self.skipping_o = block.o_name
+            self.skipping_start = self.sequence_number
+            self.executed_if = 0
+        return INTERP_OK
+
+    def _control_else(self, block: Block) -> int:
+        """``elseif`` and ``else``"""
+        otype = block.o_type
+        op = self._find_label(block)
+        if op is not None and op.type != O_if:
+            self._oerr(
+                f"{self.sequence_number}: no matching 'if' label: '{self.linetext}'"
+                f" (found '{O_OPS[op.type][2:]}' in line {op.sequence_number + 1})"
+            )
+        if otype == O_elseif:
+            if self.skipping_o and self.skipping_o != block.o_name:
+                return INTERP_OK
+            if self.executed_if:
+                self.skipping_o = block.o_name
+                self.skipping_start = self.sequence_number
+                return INTERP_OK
             if self.test_value != 0.0:
                 self.skipping_o = None
                 self.executed_if = 1
-            else:
-                self.skipping_o = block.o_name
-                self.skipping_start = self.sequence_number
-                self.executed_if = 0
-        elif otype in (O_elseif, O_else):
-            op = self._find_label(block)
-            if op is not None and op.type != O_if:
-                self._oerr(
-                    f"{self.sequence_number}: no matching 'if' label: '{self.linetext}'"
-                    f" (found '{O_OPS[op.type][2:]}' in line {op.sequence_number + 1})"
-                )
-            if otype == O_elseif:
-                if self.skipping_o and self.skipping_o != block.o_name:
-                    return INTERP_OK
-                if self.executed_if:
-                    self.skipping_o = block.o_name
-                    self.skipping_start = self.sequence_number
-                    return INTERP_OK
-                if self.test_value != 0.0:
-                    self.skipping_o = None
-                    self.executed_if = 1
-            else:
-                if self.executed_if:
-                    self.skipping_o = block.o_name
-                    self.skipping_start = self.sequence_number
-                    return INTERP_OK
-                if self.skipping_o and self.skipping_o == block.o_name:
-                    self.executed_if = 1
-                    self.skipping_o = None
-        elif otype == O_endif:
-            op = self._find_label(block)
-            if op is not None and op.type != O_if:
-                self._oerr(
-                    f"{self.sequence_number}: no matching label: '{block.o_name}' (found "
-                    f"'{O_OPS[op.type][2:]}' in line {op.sequence_number + 1}): "
-                    f"'{self.linetext}'"
-                )
-            self.skipping_o = None
-            self.executed_if = 1
-        elif otype in (O_break, O_continue):
-            op = self._find_label(block)
-            if op is not None and op.type not in (O_while, O_do):
-                self._oerr(
-                    f"{self.sequence_number}: no matching while/do label: "
-                    f"'{self.linetext}' (found '{O_OPS[op.type][2:]}' in line "
-                    f"{op.sequence_number + 1})"
-                )
-            if otype == O_break:
-                self.skipping_o = block.o_name
-                self.skipping_start = self.sequence_number
-                self.doing_break = 1
-            else:
-                if self.skipping_o and self.skipping_o == block.o_name:
-                    return INTERP_OK
-                self.skipping_o = block.o_name
-                self.skipping_start = self.sequence_number
-                self.doing_continue = 1
-        elif otype in _LOOP_ENDS:
-            op = self._find_label(block)
-            if op is not None and (
-                (otype == O_endrepeat and op.type != O_repeat)
-                or (otype == O_endwhile and op.type != O_while)
-            ):
-                self._oerr(
-                    f"{self.sequence_number}: no matching label: '{self.linetext}' "
-                    f"(found '{O_OPS[op.type][2:]}' in line {op.sequence_number + 1})"
-                )
-            if self.skipping_o and self.skipping_o == block.o_name:
-                self.skipping_o = None
-                if self.doing_continue:
-                    self.doing_continue = 0
-                    self.control_back_to(block)
-                else:
-                    return INTERP_OK
-            else:
-                self.control_back_to(block)
         else:
-            raise InterpError("Unknown control command in o word")
+            if self.executed_if:
+                self.skipping_o = block.o_name
+                self.skipping_start = self.sequence_number
+                return INTERP_OK
+            if self.skipping_o and self.skipping_o == block.o_name:
+                self.executed_if = 1
+                self.skipping_o = None
+        return INTERP_OK
+
+    def _control_endif(self, block: Block) -> int:
+        """``endif``"""
+        op = self._find_label(block)
+        if op is not None and op.type != O_if:
+            self._oerr(
+                f"{self.sequence_number}: no matching label: '{block.o_name}' (found "
+                f"'{O_OPS[op.type][2:]}' in line {op.sequence_number + 1}): "
+                f"'{self.linetext}'"
+            )
+        self.skipping_o = None
+        self.executed_if = 1
+        return INTERP_OK
+
+    def _control_break(self, block: Block) -> int:
+        """``break`` and ``continue``"""
+        otype = block.o_type
+        op = self._find_label(block)
+        if op is not None and op.type not in (O_while, O_do):
+            self._oerr(
+                f"{self.sequence_number}: no matching while/do label: "
+                f"'{self.linetext}' (found '{O_OPS[op.type][2:]}' in line "
+                f"{op.sequence_number + 1})"
+            )
+        if otype == O_break:
+            self.skipping_o = block.o_name
+            self.skipping_start = self.sequence_number
+            self.doing_break = 1
+        else:
+            if self.skipping_o and self.skipping_o == block.o_name:
+                return INTERP_OK
+            self.skipping_o = block.o_name
+            self.skipping_start = self.sequence_number
+            self.doing_continue = 1
+        return INTERP_OK
+
+    def _control_loop_end(self, block: Block) -> int:
+        """``endwhile`` and ``endrepeat``"""
+        otype = block.o_type
+        op = self._find_label(block)
+        if op is not None and (
+            (otype == O_endrepeat and op.type != O_repeat)
+            or (otype == O_endwhile and op.type != O_while)
+        ):
+            self._oerr(
+                f"{self.sequence_number}: no matching label: '{self.linetext}' "
+                f"(found '{O_OPS[op.type][2:]}' in line {op.sequence_number + 1})"
+            )
+        if self.skipping_o and self.skipping_o == block.o_name:
+            self.skipping_o = None
+            if self.doing_continue:
+                self.doing_continue = 0
+                self.control_back_to(block)
+            else:
+                return INTERP_OK
+        else:
+            self.control_back_to(block)
         return INTERP_OK
 
     def _find_label(self, block: Block) -> _Offset | None:
@@ -452,3 +490,20 @@ class OWordMixin:
         if op is None:
             self._oerr(f"{self.sequence_number}: undefined O-word label: '{self.linetext}'")
         return op
+
+
+# what convert_control_functions does, by O-word type
+_CONTROL_FUNCTIONS: dict[int, Callable] = {O_none: OWordMixin._control_none}
+for _types, _function in (
+    (_SUB_STARTS, OWordMixin._control_sub_start),
+    (_SUB_ENDS, OWordMixin._control_sub_end),
+    (_CALLS, OWordMixin._control_call),
+    ((O_do,), OWordMixin._control_do),
+    (_LOOP_TESTS, OWordMixin._control_loop_test),
+    ((O_if,), OWordMixin._control_if),
+    ((O_elseif, O_else), OWordMixin._control_else),
+    ((O_endif,), OWordMixin._control_endif),
+    ((O_break, O_continue), OWordMixin._control_break),
+    (_LOOP_ENDS, OWordMixin._control_loop_end),
+):
+    _CONTROL_FUNCTIONS.update(dict.fromkeys(_types, _function))

@@ -98,6 +98,11 @@ def _scan_line(line: str) -> tuple[int, float] | None:
     if len(parts) < 2:
         return None
     head, value = parts[0], parts[1]
+    if head.isascii() and head.isdigit():  # the common case: "5220\t1.000000"
+        try:
+            return int(head), float(value)
+        except ValueError:
+            pass
     digits = ""
     for k, ch in enumerate(head):
         if ch.isdigit() or (k == 0 and ch in "+-"):

@@ -49,6 +49,18 @@ def test_sin_of_180_degrees_is_slightly_negative_as_in_linuxcnc() -> None:
     assert ldmath.cos_deg(0.0) == 1.0
 
 
+def test_trig_results_taken_again_are_the_same_and_zeros_keep_their_sign() -> None:
+    rng = random.Random(7)
+    angles = [rng.uniform(-720.0, 720.0) for _ in range(50)] + [30.0, 45.0, 90.0, 180.0]
+    functions = (ldmath.sin_deg, ldmath.cos_deg, ldmath.tan_deg)
+    first = [_bits(f(a)) for a in angles for f in functions]
+    again = [_bits(f(a)) for a in angles for f in functions]  # (from the cache)
+    assert again == first
+    assert ldmath.sin_deg(0.0) == 0.0
+    assert math.copysign(1.0, ldmath.sin_deg(0.0)) == 1.0
+    assert math.copysign(1.0, ldmath.sin_deg(-0.0)) == -1.0  # not 0.0's cached result
+
+
 def test_trig_of_an_infinity_is_a_nan_for_the_reader_to_report() -> None:
     assert math.isnan(ldmath.sin_deg(math.inf))
     assert math.isnan(ldmath.cos_deg(-math.inf))
