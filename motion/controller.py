@@ -33,6 +33,7 @@ from motion.homing import Homing, HomingConfig, HomingError
 from motion.joint import Joint
 from motion.kinematics import Kinematics, KinematicsError
 from motion.pose import AXIS_LETTERS, NUM_AXES, EmcPose
+from motion.status import MotionStatusRuns
 from motion.tp import TermCond, TrajectoryPlanner
 from motion.tp.planner import ProbeType
 from nml import emc
@@ -65,6 +66,7 @@ class OrientState(enum.IntEnum):
 # traj.queueFull is reported while fewer planner slots than this are free (like LinuxCNC's
 # TC_QUEUE_MARGIN), so moves task has already sent still fit (see task's MAX_MOTION_IN_FLIGHT)
 QUEUE_FULL_MARGIN = 200
+
 
 @dataclass
 class Spindle:
@@ -212,6 +214,7 @@ class MotionController:
         self._is_last_move_rapid = True
         self._pending_douts: list[tuple[int, bool]] = []
         self._pending_aouts: list[tuple[int, float]] = []
+        self._status_runs: MotionStatusRuns | None = None  # of the last fill_status's record
 
     # ================================================================ commands
     def handle(self, cmd: emc.NMLmsg) -> str | None:
@@ -370,12 +373,13 @@ class MotionController:
         return "\n".join(problems) or None
 
     def _linear_move(self, cmd: emc.EMC_TRAJ_LINEAR_MOVE) -> str | None:
-        problem = self._require_coord() or self._check_soft_limits(_pose(cmd.end), "Linear move")
+        end = _pose(cmd.end)
+        problem = self._require_coord() or self._check_soft_limits(end, "Linear move")
         if problem:
             return problem
         self._note_move_type(cmd.type == emc.EMC_MOTION_TYPE.TRAVERSE)
         self.tp.add_line(
-            list(_pose(cmd.end)),
+            list(end),
             cmd.vel,
             cmd.ini_maxvel,
             cmd.acc,
@@ -388,7 +392,8 @@ class MotionController:
         return None
 
     def _circular_move(self, cmd: emc.EMC_TRAJ_CIRCULAR_MOVE) -> str | None:
-        problem = self._require_coord() or self._check_soft_limits(_pose(cmd.end), "Circular move")
+        end = _pose(cmd.end)
+        problem = self._require_coord() or self._check_soft_limits(end, "Circular move")
         if problem:
             return problem
         self._note_move_type(is_rapid=False)
@@ -400,7 +405,7 @@ class MotionController:
             normal = (-normal[0], -normal[1], -normal[2])
             turns = -turns - 1
         self.tp.add_circle(
-            list(_pose(cmd.end)),
+            list(end),
             (cmd.center.x, cmd.center.y, cmd.center.z),
             normal,
             turns,
@@ -422,14 +427,13 @@ class MotionController:
         self._is_last_move_rapid = is_rapid
 
     def _probe(self, cmd: emc.EMC_TRAJ_PROBE) -> str | None:
-        problem = self._require_coord() or self._check_soft_limits(_pose(cmd.pos), "Probe move")
+        end = _pose(cmd.pos)
+        problem = self._require_coord() or self._check_soft_limits(end, "Probe move")
         if problem:
             return problem
         # probe_type as in LinuxCNC: bit 1 set = away (G38.4/5), bit 0 = no error if no trip
         probe = ProbeType.AWAY if cmd.probe_type & 2 else ProbeType.TOWARD
-        self.tp.add_probe(
-            list(_pose(cmd.pos)), cmd.vel, cmd.ini_maxvel, cmd.acc, self.next_motion_id, probe
-        )
+        self.tp.add_probe(list(end), cmd.vel, cmd.ini_maxvel, cmd.acc, self.next_motion_id, probe)
         return None
 
     def _flush_synchronised_outputs(self) -> None:
@@ -965,73 +969,91 @@ class MotionController:
         return 0.0
 
     def fill_status(self, stat: emc.EMC_MOTION_STAT) -> None:
-        """Write the controller's state into an EMC_MOTION_STAT (MOT-066..071)."""
-        traj = stat.traj
-        traj.cycleTime = self.period_s
-        traj.joints = len(self.joints)
-        traj.spindles = len(self.spindles)
-        traj.axis_mask = getattr(self.kins, "axis_mask", 0b111)
-        traj.mode = self.mode
-        traj.enabled = self.is_enabled
-        traj.inpos = self.is_in_position
-        traj.queue = self.tp.queue_depth
-        traj.queueFull = self.tp.free_slots < QUEUE_FULL_MARGIN
-        traj.id = self.tp.motion_id
-        traj.paused = self.tp.is_paused
-        traj.scale = self.tp.feed_scale
-        traj.rapid_scale = self.tp.rapid_scale
-        _store_pose(traj.position, self.carte_pos_cmd)
-        _store_pose(traj.actualPosition, self.carte_pos_fb)
-        traj.velocity = self.traj_vel
-        traj.acceleration = self.traj_acc
-        traj.maxVelocity = self.max_vel if math.isfinite(self.max_vel) else 0.0
-        traj.maxAcceleration = self.max_acc if math.isfinite(self.max_acc) else 0.0
-        _store_pose(traj.probedPosition, EmcPose(*self.tp.probe_pos.tolist()))
-        traj.probe_tripped = self.tp.probe_tripped
-        traj.kinematics_type = int(self.kins.kinematics_type())
+        """Write the controller's state into an EMC_MOTION_STAT (MOT-066..071), in place
+        and in a few assignments (motion/status.py): motmod calls this every period."""
+        runs = self._status_runs
+        if runs is None or runs.stat is not stat:
+            runs = self._status_runs = MotionStatusRuns(stat, len(self.joints), len(self.spindles))
+        tp = self.tp
         is_coord = self.mode == COORD
-        traj.distance_to_go = self.tp.distance_to_go if is_coord else 0.0
-        _store_pose(traj.dtg, EmcPose(*self.tp.dtg.tolist()) if is_coord else EmcPose())
-        traj.current_vel = self.current_vel
-        traj.activeQueue = self.tp.active_queue if is_coord else 0
-        move = self.tp.current_move if is_coord else None
-        traj.motion_type = _motion_type(move)
-        traj.probing = move is not None and move.probe is not None
-        traj.feed_override_enabled = self.is_feed_override_enabled
-        traj.feed_hold_enabled = self.is_feed_hold_enabled
-        traj.adaptive_feed_enabled = self.is_adaptive_feed_enabled
-        for index, (joint, out) in enumerate(zip(self.joints, stat.joint, strict=False)):
-            out.minPositionLimit = _finite_or_zero(joint.min_limit)
-            out.maxPositionLimit = _finite_or_zero(joint.max_limit)
-            out.maxFerror = _finite_or_zero(joint.ferror_limit)
-            out.minFerror = _finite_or_zero(joint.min_ferror_limit)
-            out.ferrorCurrent, out.ferrorHighMark = joint.ferror, joint.ferror_high_mark
-            out.output, out.input = joint.pos_cmd, joint.pos_fb
-            out.velocity = joint.vel_cmd
-            out.inpos = not joint.planner.is_active
-            out.homing, out.homed = joint.is_homing, joint.is_homed
-            out.fault = self.is_faulted[index]
-            out.enabled = self.is_enabled
-            out.maxHardLimit, out.minHardLimit = joint.is_on_pos_limit, joint.is_on_neg_limit
-            out.overrideLimits = self.is_override_limits
-            out.backlash = joint.backlash
-        for spindle, out in zip(self.spindles, stat.spindle, strict=False):
-            out.speed = spindle.speed
-            out.spindle_scale = spindle.scale
-            out.css_maximum = abs(spindle.speed) if spindle.css_factor else 0.0
-            out.css_factor = spindle.css_factor
-            out.direction = (spindle.speed > 0) - (spindle.speed < 0)
-            out.brake = spindle.is_brake_on
-            out.enabled = out.state = spindle.speed != 0
-            out.increasing = spindle.increasing
-            out.orient_state = spindle.orient_state
-            out.orient_fault = spindle.orient_fault
-            out.spindle_override_enabled = spindle.is_override_enabled
-            out.homed = False  # spindles are not homed (LinuxCNC reports the same)
-        stat.synch_do[: len(self.digital_out)] = self.digital_out
-        stat.synch_di[: len(self.digital_in)] = self.digital_in
-        stat.analog_output[: len(self.analog_out)] = self.analog_out
-        stat.analog_input[: len(self.analog_in)] = self.analog_in
+        is_enabled = self.is_enabled
+        move = tp.current_move if is_coord else None
+        runs.traj_state.write(
+            self.period_s,  # cycleTime
+            len(self.joints),
+            len(self.spindles),
+            getattr(self.kins, "axis_mask", 0b111),
+            self.mode,
+            is_enabled,
+            self.is_in_position,  # inpos
+            tp.queue_depth,  # queue
+            tp.active_queue if is_coord else 0,  # activeQueue
+            tp.free_slots < QUEUE_FULL_MARGIN,  # queueFull
+            tp.motion_id,  # id
+            tp.is_paused,
+            tp.feed_scale,  # scale
+            tp.rapid_scale,
+            *self.carte_pos_cmd.as_tuple(),  # position
+            *self.carte_pos_fb.as_tuple(),  # actualPosition
+            self.traj_vel,  # velocity
+            self.traj_acc,  # acceleration
+            _finite_or_zero(self.max_vel),  # maxVelocity
+            _finite_or_zero(self.max_acc),  # maxAcceleration
+            *tp.probe_pos.tolist(),  # probedPosition
+            tp.probe_tripped,
+            move is not None and move.probe is not None,  # probing
+        )
+        runs.traj_path.write(
+            int(self.kins.kinematics_type()),
+            _motion_type(move),
+            tp.distance_to_go if is_coord else 0.0,
+            *(tp.dtg.tolist() if is_coord else _ZERO_POSE),  # dtg
+            self.current_vel,
+            self.is_feed_override_enabled,
+            self.is_adaptive_feed_enabled,
+            self.is_feed_hold_enabled,
+        )
+        is_override_limits = self.is_override_limits
+        for joint, fault, out, switches in zip(
+            self.joints, self.is_faulted, runs.joints, runs.joint_switches, strict=True
+        ):
+            out.write(
+                joint.backlash,
+                _finite_or_zero(joint.min_limit),  # minPositionLimit
+                _finite_or_zero(joint.max_limit),  # maxPositionLimit
+                _finite_or_zero(joint.ferror_limit),  # maxFerror
+                _finite_or_zero(joint.min_ferror_limit),  # minFerror
+                joint.ferror,  # ferrorCurrent
+                joint.ferror_high_mark,
+                joint.pos_cmd,  # output
+                joint.pos_fb,  # input
+                joint.vel_cmd,  # velocity
+                not joint.planner.is_active,  # inpos
+                bool(joint.is_homing),  # (bool: set by the homing module, maybe a user's)
+                bool(joint.is_homed),
+                fault,
+                is_enabled,
+            )
+            switches.write(joint.is_on_neg_limit, joint.is_on_pos_limit, is_override_limits)
+        for spindle, out in zip(self.spindles, runs.spindles, strict=True):
+            speed = spindle.speed
+            is_on = speed != 0
+            out.write(
+                is_on,  # state
+                speed,
+                spindle.scale,  # spindle_scale
+                abs(speed) if spindle.css_factor else 0.0,  # css_maximum
+                spindle.css_factor,
+                (speed > 0) - (speed < 0),  # direction
+                spindle.is_brake_on,  # brake
+                spindle.increasing,
+                is_on,  # enabled
+                spindle.orient_state,
+                spindle.orient_fault,
+                spindle.is_override_enabled,
+                False,  # homed: spindles are not homed (LinuxCNC reports the same)
+            )
+        runs.write_io(self.digital_out, self.digital_in, self.analog_out, self.analog_in)
 
 
 def _motion_type(move) -> int:
@@ -1047,17 +1069,16 @@ def _motion_type(move) -> int:
 
 
 def _pose(pose: emc.EmcPose) -> EmcPose:
-    t = pose.tran
-    return EmcPose(t.x, t.y, t.z, pose.a, pose.b, pose.c, pose.u, pose.v, pose.w)
-
-
-def _store_pose(out: emc.EmcPose, pose: EmcPose) -> None:
-    out.tran.x, out.tran.y, out.tran.z = pose.x, pose.y, pose.z
-    out.a, out.b, out.c, out.u, out.v, out.w = pose.a, pose.b, pose.c, pose.u, pose.v, pose.w
+    # all nine values in one unpack (tran's X Y Z, then A B C U V W): nine field reads
+    # through the message's views cost 3x more, and every queued move pays it
+    return EmcPose(*pose.to_flat())
 
 
 def _finite_or_zero(value: float) -> float:
     return value if math.isfinite(value) else 0.0
+
+
+_ZERO_POSE = (0.0,) * NUM_AXES
 
 
 _HANDLERS: dict[type, Callable[[MotionController, emc.NMLmsg], str | None]] = {

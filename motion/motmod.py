@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import time
 from typing import Any
 
 from hal.api import RtComponent, pin
@@ -45,7 +46,12 @@ from nml.errors import NmlError, NmlTimeoutError
 from nml.message import RCS_STATUS
 
 NML_PROCESS = "motion"
-MAX_COMMANDS_PER_PERIOD = 20  # bounds the command handler's time in one period
+# The command handler takes commands until a quarter of the period has gone (always one at
+# least, at most MAX_COMMANDS_PER_PERIOD) and leaves the rest queued for the next periods:
+# a move costs ~50-100 µs to queue, and while task fills the planner's queue at the start
+# of a program, 20 moves in one period overran a 1 ms servo period.
+COMMAND_PERIOD_FRACTION = 4
+MAX_COMMANDS_PER_PERIOD = 20
 
 
 class MotionPins(RtComponent):
@@ -197,9 +203,15 @@ class Motmod:
 
     # ------------------------------------------------------------------ functions
     def command_handler(self, period: int) -> None:
-        """Carry out the commands queued since the last period (MOT-009)."""
+        """Carry out the commands queued since the last period (MOT-009), for at most a
+        quarter of the period (``period`` in ns)."""
         commands = self.nml[MOTION_COMMAND]
+        if not commands.has_new_data():  # most periods: a look at the queue's count
+            return
+        give_up_at = time.monotonic_ns() + period // COMMAND_PERIOD_FRACTION
         for _ in range(MAX_COMMANDS_PER_PERIOD):
+            if time.monotonic_ns() > give_up_at:
+                break
             try:
                 cmd = commands.read()
             except NmlTimeoutError:

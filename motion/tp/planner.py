@@ -259,7 +259,9 @@ class TrajectoryPlanner:
         if not self._moves:
             return 0
         last = self._moves[0].end_s
-        for piece in self._pieces[self._head :]:
+        pieces = self._pieces
+        for index in range(self._head, len(pieces)):  # (no slice: it would copy the queue)
+            piece = pieces[index]
             if piece.s0 + piece.length >= last - 1e-12:
                 return 2 if piece.v_exit > 0.0 and len(self._moves) > 1 else 1
         return 1

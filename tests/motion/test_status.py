@@ -8,6 +8,7 @@ import math
 import pytest
 
 from motion.controller import FREE, OrientState
+from motion.status import FieldRun
 from nml import emc
 from tests.motion.test_controller import enabled_homed, move, run
 
@@ -78,3 +79,50 @@ def test_spindle_status_orient_css_and_override() -> None:
     spindle = status(motion).spindle[0]
     assert spindle.orient_state == OrientState.IN_PROGRESS and spindle.orient_fault == 0
     assert (spindle.speed, spindle.enabled, spindle.css_maximum) == (0.0, 0, 0.0)
+
+
+def test_status_filled_every_period_into_one_record_follows_the_controller() -> None:
+    """motmod fills the same record every period (motion/status.py keeps its field runs):
+    each fill shows the state of that period, not of the first one."""
+    motion = enabled_homed()
+    stat = emc.EMC_MOTION_STAT()
+    motion.fill_status(stat)
+    assert stat.traj.inpos and stat.traj.queue == 0 and stat.traj.position.tran.x == 0.0
+    assert motion.handle(move(10.0)) is None
+    run(motion, 100)
+    motion.fill_status(stat)
+    traj = stat.traj
+    assert not traj.inpos and traj.queue == 1 and traj.activeQueue == 1
+    assert 0 < traj.position.tran.x == pytest.approx(motion.carte_pos_cmd.x)
+    assert traj.actualPosition.tran.x == pytest.approx(motion.carte_pos_fb.x)
+    assert stat.joint[0].output == pytest.approx(motion.joints[0].pos_cmd)
+    assert 0 < stat.joint[0].velocity == pytest.approx(motion.joints[0].vel_cmd)
+    assert list(stat.synch_do[:4]) == [0, 0, 0, 0]
+    assert motion.handle(emc.EMC_MOTION_SET_DOUT(index=2, start=1, now=1)) is None
+    assert motion.handle(emc.EMC_MOTION_SET_AOUT(index=0, start=2.5, now=1)) is None
+    motion.fill_status(stat)
+    assert list(stat.synch_do[:4]) == [0, 0, 1, 0] and stat.analog_output[0] == 2.5
+    assert motion.handle(emc.EMC_MOTION_SET_DOUT(index=2, start=0, now=1)) is None
+    motion.fill_status(stat)
+    assert list(stat.synch_do[:4]) == [0, 0, 0, 0] and stat.analog_output[0] == 2.5
+
+
+def test_fill_status_leaves_the_fields_motion_does_not_own() -> None:
+    """The command handler's echo, task's units and the soft-limit flags are not motion's
+    per-period state: filling the status keeps them."""
+    motion = enabled_homed()
+    stat = emc.EMC_MOTION_STAT()
+    stat.echo_serial_number, stat.status = 41, 1
+    stat.traj.linearUnits, stat.traj.probeval = 25.4, 1
+    stat.joint[1].minSoftLimit = 1
+    motion.fill_status(stat)
+    motion.fill_status(stat)
+    assert (stat.echo_serial_number, stat.status) == (41, 1)
+    assert (stat.traj.linearUnits, stat.traj.probeval) == (25.4, 1)
+    assert stat.joint[1].minSoftLimit == 1 and stat.joint[1].homed
+    assert stat.traj.joints == 3 and stat.traj.cycleTime == motion.period_s
+
+
+def test_a_field_run_is_consecutive_fields_only() -> None:
+    with pytest.raises(ValueError, match="not consecutive"):
+        FieldRun(emc.EMC_MOTION_STAT().byte_view(), 0, emc.EMC_TRAJ_STAT.dtype, ("mode", "id"))
