@@ -22,7 +22,7 @@ import shlex
 import subprocess
 import time
 from collections import deque
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 
 from cnc.atomicfile import atomic_write_text
 from cnc.ini import IniFile
@@ -75,9 +75,9 @@ class LineQueue(deque):
     """What the interpreter queued for motion and iocontrol, each message with the program
     line that made it (LinuxCNC's interp_list line numbers: stat.current_line)."""
 
-    def __init__(self) -> None:
-        super().__init__()
-        self.lines: deque[int] = deque()
+    def __init__(self, messages: Iterable[emc.NMLmsg] = ()) -> None:
+        super().__init__(messages)
+        self.lines: deque[int] = deque(0 for _ in self)
         self.line = 0  # the line being interpreted: given to the messages appended now
 
     def append(self, msg: emc.NMLmsg) -> None:
@@ -124,11 +124,12 @@ class Task:
             user_m_commands=self.setup.user_m_commands,
         )
         self.canon = (canon_factory or TaskCanon)(canon_setup)
+        # what the canon queues, with line numbers (it may hold INIT_CANON's settings already)
+        self.queue = self.canon.out = LineQueue(self.canon.out)
         self.interp = Interpreter(
             self.canon, ini=ini, parameter_file=self.setup.parameter_file, task=1
         )
         self.interp.init()
-        self.queue = self.canon.out = LineQueue()
         self.current_line = 0  # the line of the message last taken from the queue
         self.mode = MODE.MANUAL
         self.state = STATE.ESTOP
