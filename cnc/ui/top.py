@@ -8,7 +8,8 @@ joints, offsets, the tool, overrides, spindle, coolant, the active G and M codes
 last operator messages. It refreshes every ``--interval`` seconds, else every
 ``[DISPLAY]CYCLE_TIME`` of the INI file, else every 0.1 s; q (or Ctrl-C) quits. While the
 controller is not up it shows why and keeps trying. ``--once`` prints one plain-text
-snapshot and exits (status 1 if the controller is not up).
+snapshot and exits (status 1 if the controller is not up). Without a terminal (a pipe, a
+log) it prints the view as plain text whenever it changes, until a signal ends it.
 
 It can be a machine's display: ``[DISPLAY]DISPLAY = top`` makes the launcher run
 ``cnc top INI_FILE``; quitting it shuts the machine down.
@@ -31,6 +32,7 @@ from cnc.ui import formatting as fmt
 from cnc.ui.controller import Controller, Message
 
 DEFAULT_INTERVAL_S = 0.1
+LOG_INTERVAL_S = 2.0  # without a terminal: at most one printed view per this many seconds
 MESSAGES_SHOWN = 4  # the last operator messages, at the bottom of the screen
 QUIT_KEYS = {ord("q"), ord("Q")}
 
@@ -120,6 +122,22 @@ def _run(screen: Any, controller: Controller, interval: float) -> None:
             return
 
 
+def _log(controller: Controller, interval: float) -> int:
+    """Without a terminal (a log, a pipe, a service): the view as plain text whenever it
+    changes, at most once per LOG_INTERVAL_S, until a signal ends it (as the machine's
+    display it must not exit early: that would shut the machine down)."""
+    print("cnc top: not a terminal: the status is printed when it changes", file=sys.stderr)
+    shown: list[str] = []
+    while True:
+        _, lines = snapshot(controller)
+        if lines[1:] != shown[1:]:  # the first line holds the clock
+            print("\n".join(lines) + "\n", flush=True)
+            shown = lines
+            time.sleep(max(interval, LOG_INTERVAL_S))
+        else:
+            time.sleep(interval)
+
+
 def _stop_on_sigterm(signum: int, frame: object) -> None:
     raise SystemExit(0)  # unwinds curses.wrapper, which restores the terminal
 
@@ -162,11 +180,10 @@ def main(argv: list[str] | None = None) -> int:
             is_up, lines = snapshot(controller)
             print("\n".join(lines), file=sys.stdout if is_up else sys.stderr)
             return 0 if is_up else 1
-        if not (sys.stdin.isatty() and sys.stdout.isatty()):
-            print("cnc top: not a terminal (--once prints a snapshot)", file=sys.stderr)
-            return 2
         interval = args.interval or display_interval(controller.ini_value("DISPLAY", "CYCLE_TIME"))
         signal.signal(signal.SIGTERM, _stop_on_sigterm)
+        if not (sys.stdin.isatty() and sys.stdout.isatty()):
+            return _log(controller, interval or DEFAULT_INTERVAL_S)
         with contextlib.suppress(locale.Error):  # LANG may name a locale not installed
             locale.setlocale(locale.LC_ALL, "")  # curses writes text in the locale's code
         curses.wrapper(_run, controller, interval or DEFAULT_INTERVAL_S)

@@ -6,9 +6,12 @@ import fcntl
 import math
 import os
 import pty
+import select
 import signal
 import struct
+import subprocess
 import termios
+import time
 from pathlib import Path
 
 import pytest
@@ -190,3 +193,23 @@ def test_a_signal_ends_the_view_and_restores_the_terminal(fake_task, procs, sign
         assert proc.wait(timeout=WAIT_S) == 0
     finally:
         os.close(master)
+
+
+def test_without_a_terminal_it_prints_the_view_until_a_signal(fake_task, procs) -> None:
+    """As a machine's display started from a script or a service (no terminal), top must
+    keep running (its exit would shut the machine down) and print what it would show."""
+    fake_task()
+    proc = procs.python(
+        "-c", UI_MAIN.format(name="top"), stdin=subprocess.DEVNULL, stdout=subprocess.PIPE
+    )
+    seen = ""
+    deadline = time.monotonic() + WAIT_S
+    while "Messages:" not in seen:
+        assert time.monotonic() < deadline, seen
+        assert proc.poll() is None, proc.stderr.read()
+        if select.select([proc.stdout], [], [], 0.5)[0]:
+            seen += os.read(proc.stdout.fileno(), 4096).decode()
+    assert "ESTOP" in seen and "MANUAL" in seen
+    proc.send_signal(signal.SIGTERM)
+    assert proc.wait(timeout=WAIT_S) == 0
+    assert "not a terminal" in proc.stderr.read()
