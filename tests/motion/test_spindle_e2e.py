@@ -9,8 +9,6 @@ feed at the feed per revolution times the measured spindle speed; M19 orients th
 from __future__ import annotations
 
 import shutil
-import signal
-import subprocess
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -18,7 +16,7 @@ import pytest
 
 import cnc
 from hal.core import Hal
-from tests.task.test_machine import MACHINE, Machine
+from tests.task.test_machine import MACHINE, Machine, launched
 
 SIM = Path(__file__).parents[2] / "configs" / "sim"
 G33_LINE = 4  # of the program below
@@ -32,17 +30,8 @@ def machine(procs, tmp_path: Path) -> Iterator[Machine]:
     ini = folder / "mill.ini"
     halfiles = "HALFILE = mill.hal\nHALFILE = sim_spindle.hal"
     ini.write_text(ini.read_text().replace("HALFILE = mill.hal", halfiles))
-    proc = procs.python("-m", "cnc", "run", "--headless", "mill.ini", cwd=folder)
-    machine = Machine(proc, folder)
-    try:
-        machine.wait_ready()
+    with launched(procs, folder) as machine:
         yield machine
-    finally:
-        proc.send_signal(signal.SIGTERM)
-        try:
-            proc.wait(timeout=30)
-        except subprocess.TimeoutExpired:
-            proc.kill()
 
 
 class Pins:
@@ -66,10 +55,7 @@ def run_program(machine: Machine, text: str, sample) -> None:
     program.write_text(text)
     machine.ready_to_move()
     c = machine.command
-    c.mode(cnc.MODE_AUTO)
-    assert c.wait_complete() == cnc.RCS_DONE
-    c.program_open(str(program))
-    assert c.wait_complete() == cnc.RCS_DONE
+    machine.open_program(program)
     c.auto(cnc.AUTO_RUN, 0)
     machine.until(lambda s: s.interp_state != cnc.INTERP_IDLE, timeout=5)
 

@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import shutil
-import signal
-import subprocess
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
@@ -19,7 +17,7 @@ def start_machine(procs, tmp_path: Path) -> Iterator[Callable[..., Machine]]:
     lines per section, e.g. ``start_machine(EMCIO=["TOOL_CHANGE_QUILL_UP = 1"])``, and extra
     files in its folder (``files={"nc/M101": "#!/bin/sh ..."}``); the
     machine comes back reset, on, homed and in MDI mode. Stopped at the end of the test."""
-    started: list[subprocess.Popen[str]] = []
+    started: list[Machine] = []
 
     def start(files: dict[str, str] | None = None, **sections: list[str]) -> Machine:
         folder = tmp_path / "machine"
@@ -38,16 +36,12 @@ def start_machine(procs, tmp_path: Path) -> Iterator[Callable[..., Machine]]:
             text = text.replace(header, header + extra) if header in text else text + header + extra
         ini.write_text(text)
         proc = procs.python("-m", "cnc", "run", "--headless", "mill.ini", cwd=folder)
-        started.append(proc)
         machine = Machine(proc, folder)
+        started.append(machine)
         machine.wait_ready()
         machine.ready_to_move()
         return machine
 
     yield start
-    for proc in started:
-        proc.send_signal(signal.SIGTERM)
-        try:
-            proc.wait(timeout=30)
-        except subprocess.TimeoutExpired:
-            proc.kill()
+    for machine in started:
+        machine.stop()

@@ -15,10 +15,7 @@ def test_a_program_longer_than_the_planner_queue_waits_for_room(start_machine) -
     moves = "".join(f"G1 X{(i % 2) * 0.002:.3f} Y{i * 0.001:.3f}\n" for i in range(1, 2601))
     program.write_text("G21 G90 G64\nF6\n" + moves + "M2\n")
     machine.messages(0.1)
-    c.mode(cnc.MODE_AUTO)
-    c.wait_complete()
-    c.program_open(str(program))
-    c.wait_complete()
+    machine.open_program(program)
     c.auto(cnc.AUTO_RUN, 0)
     deadline = time.monotonic() + 60
     while True:  # until task has filled the planner up to its margin

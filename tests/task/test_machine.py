@@ -66,6 +66,21 @@ class Machine:
             found.append(message)
         return found
 
+    def open_program(self, path: Path) -> None:
+        """AUTO mode, then ``path`` opened, as a UI does before running it."""
+        self.command.mode(cnc.MODE_AUTO)
+        assert self.command.wait_complete() == cnc.RCS_DONE
+        self.command.program_open(str(path))
+        assert self.command.wait_complete() == cnc.RCS_DONE
+
+    def stop(self) -> None:
+        """SIGTERM to the launcher, as Ctrl-C would; killed if it does not stop."""
+        self.proc.send_signal(signal.SIGTERM)
+        try:
+            self.proc.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+
     def ready_to_move(self) -> None:
         c = self.command
         c.state(cnc.STATE_ESTOP_RESET)
@@ -81,21 +96,24 @@ class Machine:
         assert c.wait_complete() == cnc.RCS_DONE
 
 
-@pytest.fixture
-def machine(procs, tmp_path: Path) -> Iterator[Machine]:
-    folder = tmp_path / "machine"
-    shutil.copytree(MACHINE, folder)
+@contextlib.contextmanager
+def launched(procs, folder: Path) -> Iterator[Machine]:
+    """The machine of ``folder``/mill.ini started headless and ready; stopped at the end."""
     proc = procs.python("-m", "cnc", "run", "--headless", "mill.ini", cwd=folder)
     machine = Machine(proc, folder)
     try:
         machine.wait_ready()
         yield machine
     finally:
-        proc.send_signal(signal.SIGTERM)
-        try:
-            proc.wait(timeout=30)
-        except subprocess.TimeoutExpired:
-            proc.kill()
+        machine.stop()
+
+
+@pytest.fixture
+def machine(procs, tmp_path: Path) -> Iterator[Machine]:
+    folder = tmp_path / "machine"
+    shutil.copytree(MACHINE, folder)
+    with launched(procs, folder) as machine:
+        yield machine
 
 
 def test_estop_reset_on_home_and_mdi_move(machine: Machine) -> None:
@@ -154,10 +172,7 @@ def test_program_with_a_loop_and_a_tool_change_runs_to_the_end(machine: Machine)
     )
     machine.ready_to_move()
     c = machine.command
-    c.mode(cnc.MODE_AUTO)
-    assert c.wait_complete() == cnc.RCS_DONE
-    c.program_open(str(program))
-    assert c.wait_complete() == cnc.RCS_DONE
+    machine.open_program(program)
     c.auto(cnc.AUTO_RUN, 0)
     machine.until(lambda s: s.interp_state != cnc.INTERP_IDLE, timeout=5)
     machine.until(lambda s: s.interp_state == cnc.INTERP_IDLE and s.inpos, timeout=30)
@@ -254,10 +269,7 @@ def start_long_program(machine: Machine) -> None:
     program.write_text("G21 G90\nG1 X40 F1800\nG1 X0\nM2\n")
     machine.ready_to_move()
     c = machine.command
-    c.mode(cnc.MODE_AUTO)
-    c.wait_complete()
-    c.program_open(str(program))
-    c.wait_complete()
+    machine.open_program(program)
     c.auto(cnc.AUTO_RUN, 0)
     machine.until(lambda s: s.position[0] > 2.0, timeout=10)
 
@@ -387,10 +399,7 @@ def test_run_from_line_skips_what_comes_before_it(machine: Machine) -> None:
     program.write_text("G21 G90\nM8\nG0 X10\nG0 Y5\nM2\n")  # line 4 is "G0 Y5"
     machine.ready_to_move()
     c = machine.command
-    c.mode(cnc.MODE_AUTO)
-    c.wait_complete()
-    c.program_open(str(program))
-    c.wait_complete()
+    machine.open_program(program)
     c.auto(cnc.AUTO_RUN, 4)
     machine.until(lambda s: s.interp_state != cnc.INTERP_IDLE, timeout=5)
     machine.until(lambda s: s.interp_state == cnc.INTERP_IDLE and s.inpos, timeout=20)
@@ -404,10 +413,7 @@ def test_step_carries_out_one_line_at_a_time(machine: Machine) -> None:
     program.write_text("G21 G90\nG0 X5\nG0 Y5\nG0 X0\nM2\n")
     machine.ready_to_move()
     c, s = machine.command, machine.stat
-    c.mode(cnc.MODE_AUTO)
-    c.wait_complete()
-    c.program_open(str(program))
-    c.wait_complete()
+    machine.open_program(program)
     seen = []
     for _ in range(3):
         c.auto(cnc.AUTO_STEP)

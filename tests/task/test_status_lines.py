@@ -12,10 +12,7 @@ def test_lines_follow_the_program(start_machine) -> None:
     c, s = machine.command, machine.stat
     program = machine.folder / "lines.ngc"
     program.write_text("G21 G90\nG1 X20 F1200\nG4 P0.6\nG0 X0\nM2\n")
-    c.mode(cnc.MODE_AUTO)
-    c.wait_complete()
-    c.program_open(str(program))
-    c.wait_complete()
+    machine.open_program(program)
     s.poll()
     assert s.current_line == 0 and s.motion_line == 0
     c.auto(cnc.AUTO_RUN, 0)

@@ -90,10 +90,7 @@ def test_spindle_commands_wait_for_the_moves_before_them(start_machine) -> None:
     c, s = machine.command, machine.stat
     program = machine.folder / "cut.ngc"
     program.write_text("G21 G90\nM3 S1000\nG1 X30 F1200\nM5\nG0 X0\nM2\n")
-    c.mode(cnc.MODE_AUTO)
-    c.wait_complete()
-    c.program_open(str(program))
-    c.wait_complete()
+    machine.open_program(program)
     c.auto(cnc.AUTO_RUN, 0)
     seen_during_cut = []
     machine.until(lambda s: s.interp_state != cnc.INTERP_IDLE, timeout=5)

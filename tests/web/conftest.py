@@ -29,7 +29,7 @@ import pytest
 from cnc.ui.web.server import Access, make_app
 from cnc.ui.web.settings import Settings
 from tests.conftest import Processes
-from tests.task.test_machine import MACHINE, Machine
+from tests.task.test_machine import MACHINE, Machine, launched
 from tests.ui.conftest import controller, fake_task, runtime_dir  # noqa: F401 (fixtures)
 
 WAIT_S = 20.0  # generous: only reached when something is broken
@@ -117,17 +117,8 @@ def machine(procs: Processes, tmp_path: Path) -> Iterator[Machine]:
     ini = folder / "mill.ini"
     ini.write_text(ini.read_text().replace("[DISPLAY]\n", "[DISPLAY]\n" + MESSAGES, 1))
     (folder / "part.ngc").write_text(PART)
-    proc = procs.python("-m", "cnc", "run", "--headless", "mill.ini", cwd=folder)
-    found = Machine(proc, folder)
-    try:
-        found.wait_ready()
+    with launched(procs, folder) as found:
         yield found
-    finally:
-        proc.send_signal(signal.SIGTERM)
-        try:
-            proc.wait(timeout=30)
-        except subprocess.TimeoutExpired:
-            proc.kill()
 
 
 @pytest.fixture
