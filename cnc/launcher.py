@@ -230,14 +230,12 @@ class Launcher:
         )
         if self.display is None or display[0] != "web" or not has_messages:
             return
-        hal = self._hal().hal
-        deadline = time.monotonic() + READY_TIMEOUT_S
-        while not (hal.meta["comps"].get("web") or {}).get("is_ready"):
-            if self.display.poll() is not None:
-                raise LaunchError("the display exited at start-up")
-            if time.monotonic() > deadline:
-                raise LaunchError(f"the display made no HAL pins within {READY_TIMEOUT_S} s")
-            time.sleep(0.02)
+        from hal.core import HalError
+
+        try:
+            self._hal().wait_ready("web", self.display, timeout=READY_TIMEOUT_S)
+        except HalError as exc:
+            raise LaunchError(f"the display's HAL pins: {exc}") from None
 
     # ------------------------------------------------------------------ running
     def wait(self) -> int:

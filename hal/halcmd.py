@@ -374,12 +374,16 @@ class HalCmd:
             self.info(f"Program '{args[0]}' finished")
             return
         if is_wait_ready:
-            self._wait_ready(comp_name, proc)
+            self.wait_ready(comp_name, proc)
             self.info(f"Component '{comp_name}' ready")
         self.info(f"Program '{args[0]}' started")
 
-    def _wait_ready(self, comp_name: str, proc: subprocess.Popen[bytes]) -> None:
-        deadline = time.monotonic() + USR_READY_TIMEOUT_S
+    def wait_ready(
+        self, comp_name: str, proc: subprocess.Popen[bytes], timeout: float = USR_READY_TIMEOUT_S
+    ) -> None:
+        """Until ``proc`` has made component ``comp_name`` ready (``loadusr -W``); HalError
+        if it exits first or ``timeout`` seconds pass."""
+        deadline = time.monotonic() + timeout
         while time.monotonic() < deadline:
             comp = self.hal.meta["comps"].get(comp_name)
             if comp and comp["is_ready"]:

@@ -620,7 +620,7 @@ class TrajectoryPlanner:
     def _is_tangent(self, tail: Piece, piece: Piece) -> bool:
         """LinuxCNC's tangency test: at the joint's top speed, the direction change within
         one period needs at most TANGENT_KINK_RATIO of each axis's acceleration."""
-        jump = np.abs(piece.tangent(0.0) - tail.tangent(tail.length))
+        jump = _tangent_jump(tail, piece)
         speed = min(tail.vplan, piece.vplan)
         turning_acc = speed / self.cycle_time + piece.acc
         return bool(np.all(jump * turning_acc <= TANGENT_KINK_RATIO * self._plan_acc))
@@ -630,7 +630,7 @@ class TrajectoryPlanner:
         ``KINK_MAX_JUMP``) is passed at rest. A nearly tangent joint may be passed at the
         speed whose per-axis velocity jump stays below ``KINK_FRACTION`` of what the axis
         can change in one period; the period that crosses it keeps the rest (see step)."""
-        jump = np.abs(piece.tangent(0.0) - tail.tangent(tail.length))
+        jump = _tangent_jump(tail, piece)
         v = min(tail.vplan, piece.vplan)
         if float(jump.max()) > KINK_MAX_JUMP:
             return 0.0
@@ -1004,9 +1004,14 @@ def _unit(v: np.ndarray) -> np.ndarray:
     return v / float(np.linalg.norm(v))
 
 
+def _tangent_jump(tail: Piece, piece: Piece) -> np.ndarray:
+    """Per-axis change of the unit tangent where ``piece`` follows ``tail``."""
+    return np.abs(piece.tangent(0.0) - tail.tangent(tail.length))
+
+
 def _is_corner(tail: Piece, piece: Piece) -> bool:
     """A direction change too large to pass at speed (see _kink_speed)."""
-    jump = np.abs(piece.tangent(0.0) - tail.tangent(tail.length))
+    jump = _tangent_jump(tail, piece)
     return float(jump.max()) > KINK_MAX_JUMP
 
 
