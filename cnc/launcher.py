@@ -138,9 +138,12 @@ class Launcher:
         return str(path)
 
     def _start_host(self) -> None:
+        from hal.rtapi_app import host_environment  # the host's module, only when needed
+
         say("starting the realtime host")
         self.host = subprocess.Popen(
             [sys.executable, "-m", "hal.rtapi_app"],
+            env=host_environment(),
             stdout=subprocess.PIPE,
             cwd=self.folder,
             process_group=0,  # Ctrl-C reaches the launcher, which stops things in order

@@ -41,7 +41,13 @@ from hal.core import (
     parse_value,
     release_hal_mutex,
 )
-from hal.rtapi_app import is_alive, purge_dead_components, release_if_unused, socket_address
+from hal.rtapi_app import (
+    host_environment,
+    is_alive,
+    purge_dead_components,
+    release_if_unused,
+    socket_address,
+)
 
 HOST_START_TIMEOUT_S = 15.0
 # halcmd's message levels: -Q, -q (default), -v, -V
@@ -95,6 +101,7 @@ class HostClient:
             return
         self.started = subprocess.Popen(
             [sys.executable, "-m", "hal.rtapi_app"],
+            env=host_environment(),
             stdin=subprocess.DEVNULL,
             stdout=subprocess.DEVNULL,
             stderr=stderr if stderr is not None else subprocess.DEVNULL,

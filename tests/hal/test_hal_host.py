@@ -3,13 +3,15 @@
 from __future__ import annotations
 
 import resource
+import signal
+import subprocess
 import sys
 from pathlib import Path
 
 import pytest
 
 from hal.core import Hal
-from hal.rtapi_app import Host
+from hal.rtapi_app import Host, host_environment
 from tests.hal.halrun_util import FILES, halrun_text
 
 SLEEP = f"loadusr -w {sys.executable} -c 'import time; time.sleep(0.05)'\n"
@@ -102,3 +104,30 @@ def test_stepgen_steps_from_a_base_thread(tmp_path: Path) -> None:
     assert int(counts) < 0
     assert float(position) == pytest.approx(int(counts) / 1000, abs=1 / 1000)
     assert direction == "TRUE"
+
+
+def test_host_objects_come_from_malloc_unless_the_user_chose(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    monkeypatch.delenv("PYTHONMALLOC", raising=False)
+    assert host_environment()["PYTHONMALLOC"] == "malloc"
+    monkeypatch.setenv("PYTHONMALLOC", "debug")
+    assert host_environment()["PYTHONMALLOC"] == "debug"
+
+
+@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGINT])
+def test_host_waiting_for_requests_exits_on_a_signal(signum: int) -> None:
+    host = subprocess.Popen(
+        [sys.executable, "-m", "hal.rtapi_app", "--no-rt"],
+        env=host_environment(),
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        assert host.stdout.readline().strip() == "rtapi_app: ready"
+        host.send_signal(signum)
+        assert host.wait(timeout=10) == 0
+    finally:
+        if host.poll() is None:
+            host.kill()
+            host.wait()
