@@ -21,8 +21,10 @@ Prints one JSON object:
   host's ``servo-thread.overruns``), and ``loaded`` the same with one busy process on every
   CPU but the realtime one.
 - ``planner_us_per_period``: CPU time of motion-command-handler + motion-controller per
-  period during the dense program (queueing moves, planning, joints, status), p50/p99/max;
+  period during the dense program (queueing moves, planning, joints, status), p50/p99/p999/max;
   ``planner_wall_us_per_period`` the same in wall time.
+- ``host_memory_growth_mib``: growth of the realtime host's resident memory while the dense
+  program ran (memory locked: what it grows by is faulted in inside servo periods).
 - ``programs``: per program ``ours_s`` (RUN to idle) and ``lcnc_s``, ``time_ratio``
   (ours / LinuxCNC), ``max_vel_ratio`` / ``max_acc_ratio`` (peak per-axis velocity and
   acceleration over the configured limit) and ``max_path_dev_mm`` (largest distance from
@@ -168,6 +170,21 @@ def thread_overruns() -> int:
         hal.close()
 
 
+def host_memory_kib() -> int:
+    """Resident memory of the running machine's realtime host (owner of ``motmod``), KiB."""
+    from hal.core import Hal
+
+    hal = Hal(is_creating=False)
+    try:
+        pid = hal.meta["comps"]["motmod"]["pid"]
+    finally:
+        hal.close()
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("VmRSS:"):
+            return int(line.split()[1])
+    return 0
+
+
 def realtime_cpu() -> int:
     """The CPU of the realtime host's threads: $CNC_HAL_CPU, else the last one."""
     from hal.rtapi_app import CPU_ENV
@@ -190,9 +207,15 @@ def run_ours(
         def run(program: Path, tag: str) -> dict:
             samples = folder / f"ours_{program.stem}{tag}.txt"
             recorder = CncSampler(samples, env)
+            memory_before = host_memory_kib()
             result = run_program(cnc, str(program), recorder, timeout)
+            grown_mib = round((host_memory_kib() - memory_before) / 1024, 1)
             print(f"ours {program.stem}{tag}: {result['cycle_s']} s", file=sys.stderr, flush=True)
-            return result | {"samples": samples, "overruns": recorder.overruns}
+            return result | {
+                "samples": samples,
+                "overruns": recorder.overruns,
+                "host_memory_growth_mib": grown_mib,
+            }
 
         for program in programs:
             results[program.stem] = run(program, "")
@@ -434,10 +457,11 @@ def period_figures(run: dict) -> tuple[dict[str, Any], dict[str, Any], dict[str,
 
 def _stats(us: np.ndarray) -> dict[str, float | None]:
     if len(us) == 0:
-        return {"p50": None, "p99": None, "max": None}
+        return {"p50": None, "p99": None, "p999": None, "max": None}
     return {
         "p50": round(float(np.median(us)), 1),
         "p99": round(float(np.percentile(us, 99)), 1),
+        "p999": round(float(np.percentile(us, 99.9)), 1),
         "max": round(float(us.max()), 1),
     }
 
@@ -498,6 +522,7 @@ def main() -> int:
             "lateness": lateness,
             "planner_us_per_period": cpu,
             "planner_wall_us_per_period": wall,
+            "host_memory_growth_mib": dense_runs["idle"]["host_memory_growth_mib"],
             "programs": {},
         }
         paths = programmed_paths(programs, folder)
@@ -515,6 +540,7 @@ def main() -> int:
                 "overruns": lateness["overruns"],
                 "planner_us_p50": cpu["p50"],
                 "planner_us_p99": cpu["p99"],
+                "host_memory_growth_mib": mine["host_memory_growth_mib"],
             }
             theirs = (lcnc or {}).get(name)
             if theirs is not None:

@@ -35,6 +35,7 @@ def test_quick_run_reports_every_figure(procs, tmp_path, cnc_instance):
     assert set(lateness["loaded"]) >= LATENESS_KEYS
     assert lateness["periods"] > 0
     assert report["planner_us_per_period"]["p50"] > 0
+    assert isinstance(report["host_memory_growth_mib"], float)
     square = report["programs"]["square"]
     assert square["ours_is_ok"] and "ours_messages" not in square, square
     assert square["lcnc_s"] is None
