@@ -4,11 +4,13 @@
   semaphores are named apart from any running machine and from other tests; whatever the
   test leaves in /dev/shm is removed afterwards, and reported as a failure of the test.
 - ``procs`` starts real OS processes and kills any still running at teardown.
+- ``collector_off`` runs a test as the realtime host runs: no automatic garbage collection.
 """
 
 from __future__ import annotations
 
 import contextlib
+import gc
 import itertools
 import os
 import signal
@@ -94,3 +96,15 @@ def procs() -> Iterator[Processes]:
 
 def pytest_configure(config: pytest.Config) -> None:
     config.addinivalue_line("markers", "allow_leftovers: the test checks cleanup itself")
+
+
+@pytest.fixture
+def collector_off() -> Iterator[None]:
+    """The realtime host's setting (hal/README.md): the garbage collector does not run, so
+    a reference cycle made now stays until collected; ``gc.collect()`` then counts them."""
+    gc.collect()
+    gc.disable()
+    try:
+        yield
+    finally:
+        gc.enable()

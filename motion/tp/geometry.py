@@ -9,11 +9,17 @@ limits each piece knows two bounds over its whole length (``axis_bounds``):
 
 From them the planner derives a speed cap and a tangential acceleration that keep every
 axis inside its velocity and acceleration limits at every point of the piece.
+
+Queueing a move builds its pieces, so the per-move work here uses plain floats (lists from
+``tolist()`` and ``math``) wherever numpy's per-call overhead would dominate nine-element
+arithmetic; the vectors a piece keeps stay numpy arrays.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
+from operator import mul
 
 import numpy as np
 
@@ -27,8 +33,8 @@ EPS = 1e-9
 
 def path_length(delta: np.ndarray) -> float:
     """LinuxCNC's rule for a move's length: XYZ if they move, else UVW, else ABC."""
-    for group in (XYZ, UVW, ABC):
-        length = math.sqrt(float(delta[group] @ delta[group]))
+    x, y, z, a, b, c, u, v, w = delta.tolist()
+    for length in (math.hypot(x, y, z), math.hypot(u, v, w), math.hypot(a, b, c)):
         if length > EPS:
             return length
     return 0.0
@@ -75,30 +81,33 @@ class Piece:
 
     def apply_limits(
         self,
-        max_acc: np.ndarray,
-        inv_vel: np.ndarray,
-        inv_acc: np.ndarray,
+        max_acc: Sequence[float],
+        inv_vel: Sequence[float],
+        inv_acc: Sequence[float],
         move_vel: float,
         move_acc: float,
         normal_fraction: float,
     ) -> None:
         """Set ``vcap`` and ``acc`` from the axis limits (see the module docstring);
-        ``inv_vel``/``inv_acc`` are the reciprocals of the axis limits.
+        ``inv_vel``/``inv_acc`` are the reciprocals of the axis limits (nine floats each).
 
         At most ``normal_fraction`` of the acceleration budget goes to the centripetal part;
         what the cap leaves unused is given to the tangential part."""
         t, n = self.axis_bounds()
         vcap = move_vel
-        worst = float((t * inv_vel).max())
+        worst = max(map(mul, t, inv_vel))
         if worst > 0:
             vcap = min(vcap, 1.0 / worst)
-        worst = float((n * inv_acc).max())
+        worst = max(map(mul, n, inv_acc)) if n is not None else 0.0
         if worst > 0:
             vcap = min(vcap, math.sqrt(normal_fraction / worst))
-            spare = np.where(t > EPS, (max_acc - (vcap * vcap) * n) / np.maximum(t, EPS), np.inf)
-            acc = min(move_acc, float(spare.min()))
+            v2 = vcap * vcap
+            acc = move_acc
+            for t_i, n_i, max_acc_i in zip(t, n, max_acc, strict=True):
+                if t_i > EPS:
+                    acc = min(acc, (max_acc_i - v2 * n_i) / t_i)
         else:
-            worst = float((t * inv_acc).max())
+            worst = max(map(mul, t, inv_acc))
             acc = min(move_acc, 1.0 / worst) if worst > 0 else move_acc
         self.vcap = max(vcap, 0.0)
         self.acc = self.acc_head = self.acc_tail = max(acc, EPS)
@@ -126,7 +135,8 @@ class Piece:
     def tangent(self, s: float) -> np.ndarray:
         raise NotImplementedError
 
-    def axis_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+    def axis_bounds(self) -> tuple[list[float], list[float] | None]:
+        """``T`` and ``N`` per axis (see the module docstring); ``N`` None: straight."""
         raise NotImplementedError
 
 
@@ -159,8 +169,8 @@ class LinePiece(Piece):
     def tangent(self, s: float) -> np.ndarray:
         return self.direction
 
-    def axis_bounds(self) -> tuple[np.ndarray, np.ndarray]:
-        return np.abs(self.direction), np.zeros(NUM_AXES)
+    def axis_bounds(self) -> tuple[list[float], list[float] | None]:
+        return list(map(abs, self.direction.tolist())), None
 
     def trim_start(self, d: float) -> None:
         self.start = self.start + self.direction * d
@@ -189,12 +199,12 @@ class ArcPiece(Piece):
         h: np.ndarray,
     ) -> None:
         dr = (r1 - r0) / theta
-        rmean = 0.5 * (r0 + r1)
+        radial = math.hypot(0.5 * (r0 + r1), dr)  # mean radius and spiral, per radian
         # length by the XYZ (else UVW, else ABC) rule applied to the tangent magnitude
+        e1_list, h_list = e1.tolist(), h.tolist()
         per_radian = 0.0
         for g in (XYZ, UVW, ABC):
-            plane2 = float(e1[g] @ e1[g])
-            per_radian = math.sqrt((rmean * rmean + dr * dr) * plane2 + float(h[g] @ h[g]))
+            per_radian = math.hypot(radial * math.hypot(*e1_list[g]), *h_list[g])
             if per_radian > EPS:
                 break
         super().__init__(move, per_radian * theta)
@@ -243,12 +253,17 @@ class ArcPiece(Piece):
         self.theta -= d * self.k
         self.length -= d
 
-    def axis_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+    def axis_bounds(self) -> tuple[list[float], list[float] | None]:
         rmax = max(self.r0, self.r0 + self.dr * self.theta)
-        plane = np.sqrt(self.e1 * self.e1 + self.e2 * self.e2)
-        t = ((abs(self.dr) + rmax) * plane + np.abs(self.h)) * self.k
-        n = (2 * abs(self.dr) + rmax) * plane * self.k * self.k
-        return t, n
+        k, dr = self.k, abs(self.dr)
+        plane = list(map(math.hypot, self.e1.tolist(), self.e2.tolist()))
+        t_plane, n_plane = (dr + rmax) * k, (2 * dr + rmax) * k * k
+        h = self.h.tolist()
+        if any(h):  # a helix, or other axes moving along
+            t = [t_plane * p + abs(h_i) * k for p, h_i in zip(plane, h, strict=True)]
+        else:
+            t = [t_plane * p for p in plane]
+        return t, [n_plane * p for p in plane]
 
 
 def circle_piece(
@@ -303,7 +318,7 @@ def blend_arc(
     along ``u2`` at ``corner``, turning by ``turn`` radians."""
     d = radius * math.tan(0.5 * turn)
     inward = u2 - math.cos(turn) * u1
-    inward /= np.linalg.norm(inward)
+    inward /= math.hypot(*inward.tolist())
     start = corner - u1 * d
     centre = start + inward * radius
     return ArcPiece(move, centre, -inward, u1.copy(), radius, radius, turn, np.zeros(NUM_AXES))

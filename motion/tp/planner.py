@@ -7,12 +7,14 @@ speed is limited only by the axis limits (speed cap and tangential acceleration 
 Corners where an arc meets a line or another arc in one XYZ plane are blended the same way,
 the arc trimmed like a line (``_blend_curved``); other real corners are passed at rest.
 
-Lookahead: once per servo period a backward pass over the pieces queued since the last
-one raises the planned exit speeds of the pieces before them as far as braking allows
-(the queue tail always ends at rest); it stops as soon as a speed does not change, so its
-cost is the braking distance, not the queue. A period that crosses from one piece into
-the next can only use the lower of their accelerations, so the first and last stretch of
-each piece is planned with that (``Piece.zones``): plan and servo period agree exactly.
+Lookahead: a backward pass over the pieces queued since the last one raises the planned
+exit speeds of the pieces before them as far as braking allows (the queue tail always
+ends at rest); it stops as soon as a speed does not change, so its cost is the braking
+distance, not the queue, and it is spread over a few servo periods while the machine is
+far from the pieces it changes (``_backward_pass``). A period that crosses from one piece
+into the next can only use the lower of their accelerations, so the first and last
+stretch of each piece is planned with that (``Piece.zones``): plan and servo period agree
+exactly.
 
 Servo period (``step``): the path speed follows the cap with bounded acceleration and
 brakes onto the planned curve of the pieces this period may reach, onto feed changes
@@ -54,8 +56,18 @@ ACC_MARGIN = 0.995
 # A blend must be estimated at least this much faster than a stop (fraction of the stop's
 # time loss) to be chosen.
 BLEND_GAIN = 0.85
-# Pieces queued before the lookahead's backward pass runs (see _backward_pass).
-REPLAN_BATCH = 16
+# Pieces queued before the lookahead's backward pass starts (see _backward_pass).
+REPLAN_BATCH = 64
+# Pieces the backward pass plans per servo period while no stale plan is within reach: a
+# pass re-plans the whole braking ramp at the queue's end (about a hundred pieces on a
+# dense program), so it is spread over a few periods instead of taking one at once.
+PASS_PIECES_PER_PERIOD = 40
+# Pieces done that are dropped from the queue at once: freeing a piece and its vectors
+# costs about half a microsecond, so hundreds at once would make one period slow.
+DONE_PIECES_KEPT = 32
+# Moves and pieces of a dropped queue (abort) freed per period, for the same reason: a full
+# queue of a dense program holds thousands, milliseconds' worth of freeing.
+FREED_PER_PERIOD = 64
 # Largest blend deviation as a fraction of the shorter line (G64 without P).
 TOLERANCE_FRACTION = 0.25
 # Largest per-axis change of the unit tangent passed without stopping (about 3 degrees).
@@ -160,6 +172,10 @@ class TrajectoryPlanner:
         self.is_start_held = False  # no move starts from rest while set (M19 wait)
         self._sync = (SyncMode.NONE, 0.0)  # for the moves queued next
         self._is_at_speed_wait_pending = False
+        self._moves: deque[Move] = deque()
+        self._pieces: list[Piece] = []
+        # queues dropped by _reset_queue, freed FREED_PER_PERIOD items a period by step
+        self._dropped: list[deque[Move] | list[Piece]] = []
         self._reset_queue(np.zeros(NUM_AXES))
 
     # ------------------------------------------------------------------ configuration
@@ -182,14 +198,21 @@ class TrajectoryPlanner:
         # plan slightly inside the acceleration limits: a period that straddles two pieces
         # mixes their accelerations (see step)
         self._plan_acc = acc * ACC_MARGIN
-        self._inv_vel, self._inv_acc = 1.0 / vel, 1.0 / self._plan_acc  # 0: unlimited axis
+        # what Piece.apply_limits takes for every piece, as plain floats (0: unlimited axis)
+        self._piece_axis_limits = (
+            self._plan_acc.tolist(),
+            (1.0 / vel).tolist(),
+            (1.0 / self._plan_acc).tolist(),
+        )
         self.max_vel, self.max_acc = float(max_vel), float(max_acc)
 
     def _reset_queue(self, pos: np.ndarray) -> None:
         """Empty queue, at rest at ``pos``; probe results and the last motion id stay."""
-        self._pieces: list[Piece] = []
+        if self._moves or self._pieces:
+            self._dropped += [self._pieces, self._moves]  # the moves are freed first
+        self._pieces = []
         self._head = 0  # index of the piece being executed
-        self._moves: deque[Move] = deque()
+        self._moves = deque()
         self._feed_points: deque[tuple[float, Move]] = deque()  # feed changes ahead
         self._end = pos.copy()  # where the next queued move starts
         self._s = 0.0  # position within the current piece
@@ -199,6 +222,12 @@ class TrajectoryPlanner:
         self._is_aborting = False
         self._step_end: float | None = None  # cumulative position where STEP stops
         self._first_dirty: int | None = None  # first piece whose plan is out of date
+        # the backward pass under way (see _backward_pass): the next piece it plans (None:
+        # no pass under way), the highest entry speed of the piece after that one, and the
+        # first piece whose plan was out of date when it started
+        self._pass_next: int | None = None
+        self._pass_entry = 0.0
+        self._pass_first_changed = 0
         self._reach = 0.0  # braking distance from the fastest queued piece, with margin
         self._probe_armed = False
         self.is_paused = False
@@ -439,9 +468,7 @@ class TrajectoryPlanner:
         """Speed cap and acceleration of a piece; its planning speed is the cap or the
         move's velocity at the highest feed override, whichever is lower."""
         piece.apply_limits(
-            self._plan_acc,
-            self._inv_vel,
-            self._inv_acc,
+            *self._piece_axis_limits,
             min(ini_maxvel, self.max_vel),
             min(acc, self.max_acc) * ACC_MARGIN,
             NORMAL_FRACTION,
@@ -649,43 +676,93 @@ class TrajectoryPlanner:
         piece.window = (piece.vcap + piece.acc * dt) * dt
         pieces = self._pieces
         first = len(pieces)
+        acc, acc_head = piece.acc, piece.acc_head
         gap = 0.0  # from the end of piece j to the start of the new piece
         for j in range(len(pieces) - 1, self._head - 1, -1):
             prev = pieces[j]
             if gap > prev.window:
                 break
-            if piece.acc < prev.acc_tail:
-                prev.acc_tail = piece.acc
+            if acc < prev.acc_tail:
+                prev.acc_tail = acc
                 first = j
-            piece.acc_head = min(piece.acc_head, prev.acc)
+            if prev.acc < acc_head:
+                acc_head = prev.acc
             gap += prev.length
+        piece.acc_head = acc_head
         pieces.append(piece)
         return first
 
     def _backward_pass(self) -> None:
         """Raise planned exit speeds from the tail back while they change (lookahead).
 
-        Each pass recomputes the braking ramp at the queue's end, whatever number of
-        pieces came since the last one, so passes are batched: one runs when
-        ``REPLAN_BATCH`` pieces are waiting, or earlier when the servo period gets within
-        braking reach of the first piece whose plan is out of date. Farther pieces may wait:
-        the period only uses the plan of the pieces it can reach."""
-        first_changed = self._first_dirty
-        if first_changed is None:
-            return
+        A pass starts from the queue's end (at rest) and re-plans the braking ramp there,
+        whatever number of pieces came since the last one, so passes are batched: one starts
+        when ``REPLAN_BATCH`` pieces are waiting, or earlier when the servo period gets
+        within braking reach of the first piece whose plan is out of date. A pass plans at
+        most ``PASS_PIECES_PER_PERIOD`` pieces per period and goes on in the next ones.
+
+        Meanwhile each piece's plan fits its successor's, so the servo period can follow
+        it, except where ``_stale_from`` says; whenever that is within braking reach, the
+        planning runs to the end in this period, as one whole pass did."""
         pieces = self._pieces
         here = pieces[self._head].s0 + self._s
-        stale_from = pieces[max(first_changed, self._head)].s0
-        if len(pieces) - first_changed < REPLAN_BATCH and stale_from - here > self._reach:
-            return
+        if self._pass_next is None:
+            first_dirty = self._first_dirty
+            if first_dirty is None:
+                return
+            is_batch = len(pieces) - first_dirty >= REPLAN_BATCH
+            if not is_batch and self._stale_from() - here > self._reach:
+                return
+            self._start_pass()
+        if self._stale_from() - here > self._reach:
+            self._continue_pass(PASS_PIECES_PER_PERIOD)
+            if self._stale_from() - here > self._reach:
+                return
+        while self._pass_next is not None or self._first_dirty is not None:
+            if self._pass_next is None:
+                self._start_pass()
+            self._continue_pass(len(pieces))
+
+    def _start_pass(self) -> None:
+        self._pass_next = len(self._pieces) - 1
+        self._pass_entry = 0.0  # the tail ends at rest
+        self._pass_first_changed = self._first_dirty
         self._first_dirty = None
-        v_next_entry = 0.0  # the tail ends at rest
+
+    def _stale_from(self) -> float:
+        """Path position of the first piece whose plan may not fit its successor's: one
+        changed since the pass under way started, one changed before that the pass has yet
+        to re-plan, or the last one it has yet to re-plan when the pass is lowering exits
+        (its planned exit above the entry speed the re-planned pieces now allow). Pieces
+        the pass has yet to reach otherwise keep a plan that brakes onto a queue end nearer
+        than the new one: their exits are no higher than the new plan's, so they fit."""
+        pieces = self._pieces
+        first = len(pieces)
+        if self._first_dirty is not None:
+            first = self._first_dirty
+        pass_next = self._pass_next
+        if pass_next is not None:
+            if pass_next >= self._pass_first_changed:
+                first = min(first, self._pass_first_changed)
+            elif pieces[pass_next].v_exit > self._pass_entry:
+                first = min(first, pass_next)
+        if first >= len(pieces):
+            return math.inf
+        return pieces[max(first, self._head)].s0
+
+    def _continue_pass(self, budget: int) -> None:
+        """Plan up to ``budget`` pieces of the pass under way, from ``_pass_next`` back."""
+        pieces = self._pieces
+        first_changed = self._pass_first_changed
+        v_next_entry = self._pass_entry
+        lowest = max(self._pass_next - budget + 1, self._head)
         sqrt = math.sqrt
-        for i in range(len(pieces) - 1, self._head - 1, -1):
+        for i in range(self._pass_next, lowest - 1, -1):
             p = pieces[i]
             v_exit = p.exit_max if p.exit_max < v_next_entry else v_next_entry
             if i < first_changed and v_exit == p.v_exit:
-                break
+                self._pass_next = None  # the rest of the plan stands
+                return
             p.v_exit = v_exit
             # Piece.zones, inlined: this loop is the planner's hottest
             length, window, acc = p.length, p.window, p.acc
@@ -701,6 +778,10 @@ class TrajectoryPlanner:
                 v_next_entry = sqrt(v_body * v_body + 2.0 * head_acc * window)
             if v_next_entry > p.vplan:
                 v_next_entry = p.vplan
+        if lowest <= self._head:
+            self._pass_next = None  # planned up to the piece being executed
+        else:
+            self._pass_next, self._pass_entry = lowest - 1, v_next_entry
 
     # ------------------------------------------------------------------ commands
     def pause(self) -> None:
@@ -743,6 +824,8 @@ class TrajectoryPlanner:
     # ------------------------------------------------------------------ servo period
     def step(self) -> np.ndarray:
         """Advance one servo period; returns the commanded 9-axis position."""
+        if self._dropped:
+            self._free_dropped()
         if not self._moves:
             self.vel = 0.0
             return self.pos
@@ -821,6 +904,20 @@ class TrajectoryPlanner:
         v_new = max(min(v_new, v + a_low * dt), v - a_low * dt, 0.0)
         self._advance(0.5 * (v + v_new) * dt, v_new)
         return self.pos
+
+    def _free_dropped(self) -> None:
+        """Free up to FREED_PER_PERIOD moves and pieces of the queues dropped."""
+        dropped = self._dropped
+        for _ in range(FREED_PER_PERIOD):
+            items = dropped[-1]
+            if items:
+                item = items.pop()
+                if isinstance(item, Move):
+                    _release(item)
+            else:
+                dropped.pop()
+                if not dropped:
+                    return
 
     def _feed_speed(self, move: Move) -> float:
         """The speed a move asks for now: its feed with the override, or from the
@@ -923,9 +1020,14 @@ class TrajectoryPlanner:
                 self._reset_queue(self.pos)
             else:
                 self.is_paused = True
-        if self._head > 512:  # drop the pieces done; indices shift down with them
+        if self._head > DONE_PIECES_KEPT:  # drop the pieces done; indices shift down with them
             if self._first_dirty is not None:
                 self._first_dirty = max(self._first_dirty - self._head, 0)
+            if self._pass_next is not None:
+                self._pass_next -= self._head
+                if self._pass_next < 0:
+                    self._pass_next = None  # the pass has nothing left to plan
+                self._pass_first_changed = max(self._pass_first_changed - self._head, 0)
             del pieces[: self._head]
             self._head = 0
 
@@ -939,6 +1041,7 @@ class TrajectoryPlanner:
     def _finish_move(self, move: Move) -> None:
         if self._moves and self._moves[0] is move:
             self._moves.popleft()
+            _release(move)
             self._probe_armed = False
             if move.probe is not None and not self.probe_tripped and move.is_error_without_trip:
                 self.error = "probe move finished without the probe tripping"
@@ -1077,6 +1180,13 @@ def _tangent_arc(
         return None
     radius = 0.5 * (a + b) / math.tan(0.5 * turn)
     return blend_arc(move, start + t1 * a, t1, t2, radius, turn), d2
+
+
+def _release(move: Move) -> None:
+    """Drop a move's references to its pieces, which point back to it, once it left the
+    queue: the realtime host runs without the garbage collector, so that reference cycle
+    would keep every move and its pieces in memory (ARCH-017)."""
+    move.line = move.arc = None
 
 
 def _feed_key(move: Move) -> tuple:

@@ -252,6 +252,7 @@ def _stats(us: np.ndarray) -> dict:
     return {
         "median": round(float(np.median(us)), 1),
         "p99": round(float(np.percentile(us, 99)), 1),
+        "p999": round(float(np.percentile(us, 99.9)), 1),
         "max": round(float(us.max()), 1),
     }
 

@@ -29,7 +29,7 @@ COMPONENTS = sorted(
 
 
 @pytest.mark.parametrize("module", COMPONENTS)
-def test_component_periods_leave_no_cycles(module: str) -> None:
+def test_component_periods_leave_no_cycles(module: str, collector_off) -> None:
     with bench(module, ARGS.get(module, "")) as comp:
         hal = comp.hal
         inputs = [
@@ -38,7 +38,6 @@ def test_component_periods_leave_no_cycles(module: str) -> None:
             if info["dir"] in (HAL_IN, HAL_IO) and info["type"] in (HAL_BIT, HAL_FLOAT)
         ]
         gc.collect()
-        gc.disable()
         try:
             for period in range(300):
                 for hal_type, slot in inputs:  # bits toggle, floats ramp: branches move
@@ -47,5 +46,4 @@ def test_component_periods_leave_no_cycles(module: str) -> None:
                 comp.run()
             assert gc.collect() == 0
         finally:
-            gc.enable()
             comp.host.unload_all()  # components with shared memory of their own remove it
