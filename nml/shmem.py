@@ -90,6 +90,26 @@ _IDENTITY = struct.Struct("<II")  # magic, version at offset 0
 _LATEST_STATE = struct.Struct("<QQQ")  # seq, write_count, latest_len: read in one go
 
 
+# this process's pid, kept up to date across fork: getpid is a system call, and a lock
+# records its holder on every read and write
+_pid = os.getpid()
+
+
+def _refresh_pid() -> None:
+    global _pid
+    _pid = os.getpid()
+
+
+os.register_at_fork(after_in_child=_refresh_pid)
+
+
+def _slot_field_struct(key: str, slots: int) -> struct.Struct:
+    """A struct that reads field ``key`` of every slot at once, from the first slot on."""
+    offset, fmt = _SLOT_FIELDS[key]
+    size = struct.calcsize(fmt)
+    return struct.Struct("<" + f"{offset}x{fmt[1:]}{SLOT_SIZE - offset - size}x" * slots)
+
+
 def _align8(n: int) -> int:
     return (n + 7) & ~7
 
@@ -148,6 +168,8 @@ class ShmBuffer:
         self.process = process
         self.name = buffer.name
         self.layout = BufferLayout(buffer.size, buffer.max_procs)
+        # every slot's is_waiting flag in one read (a write and a read check them all)
+        self._waiting_flags = _slot_field_struct("is_waiting", buffer.max_procs)
         self.encoding = Encoding.from_neut(buffer.is_neutral)
         self.is_queue = buffer.is_queue
         self.is_broadcast = buffer.is_broadcast
@@ -433,7 +455,7 @@ class ShmBuffer:
                         f"(held by pid {holder})"
                     ) from None
                 continue
-            self._put("holder_pid", os.getpid())
+            self._put("holder_pid", _pid)
             self._is_locked = True
             return
 
@@ -467,8 +489,11 @@ class ShmBuffer:
     # ------------------------------------------------------------------ waking
     def _wake_waiters(self) -> None:
         """Post every slot marked waiting (called with the mutex held)."""
-        for index in range(self.config.max_procs):
-            if self._slot_get(index, "is_waiting"):
+        flags = self._waiting_flags.unpack_from(self._mm, self.layout.slots_offset)  # type: ignore[arg-type]
+        if not any(flags):
+            return
+        for index, is_waiting in enumerate(flags):
+            if is_waiting:
                 self._slot_put(index, "is_waiting", 0)
                 self._wake_sem(index).release()
 
