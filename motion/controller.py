@@ -5,6 +5,8 @@ pins and NML buffers). It owns the joints, the free-mode planners, the coordinat
 trajectory planner and the kinematics, and follows LinuxCNC's position flow (MOT-001..007):
 
     coord:  trajectory planner -> carte_pos_cmd -> inverse kinematics -> joint pos_cmd
+    teleop: axis jogs + teleop vector, slowed within the joint limits -> carte_pos_cmd
+            -> inverse kinematics -> joint pos_cmd (motion/teleop.py)
     free:   per-joint planners -> joint pos_cmd -> forward kinematics -> carte_pos_cmd
     both:   motor_pos_cmd = pos_cmd + motor_offset;  pos_fb = motor_pos_fb - motor_offset
 
@@ -24,9 +26,12 @@ from __future__ import annotations
 
 import contextlib
 import enum
+import itertools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
+
+import numpy as np
 
 from motion.free import FreePlanner, JogLimitError
 from motion.homing import Homing, HomingConfig, HomingError
@@ -34,6 +39,7 @@ from motion.joint import Joint
 from motion.kinematics import Kinematics, KinematicsError
 from motion.pose import AXIS_LETTERS, NUM_AXES, EmcPose
 from motion.status import MotionStatusRuns
+from motion.teleop import Fit, JointLimiter, JointLimits, TeleopPlanner
 from motion.tp import TermCond, TrajectoryPlanner
 from motion.tp.planner import ProbeType
 from nml import emc
@@ -188,6 +194,11 @@ class MotionController:
         self.axis_planners = [
             FreePlanner(DEFAULT_JOINT_VEL, DEFAULT_JOINT_ACC) for _ in range(NUM_AXES)
         ]
+        # ... plus the teleop vector (MOT-055); their sum is kept within the joint limits
+        self.teleop = TeleopPlanner(
+            self.axis_max_vel, self.axis_max_acc, self.axis_min_limit, self.axis_max_limit
+        )
+        self.joint_limiter = JointLimiter(self._inverse_array)
         self.mode = FREE
         self.is_enabled = False
         self.is_override_limits = False
@@ -256,12 +267,14 @@ class MotionController:
         for joint in self.joints:
             joint.planner.reset(joint.pos_cmd)
         self.tp.set_position(list(self.carte_pos_cmd))
+        self._reset_teleop()
 
     def _abort(self, _cmd: emc.NMLmsg) -> None:
         """ABORT: always accepted, idempotent; decelerates, then empties the queue (MOT-022)."""
         self.homing.abort()
-        for planner in [*(j.planner for j in self.joints), *self.axis_planners]:
+        for planner in (j.planner for j in self.joints):
             planner.stop()
+        self._stop_teleop()
         self.tp.abort()
         self._orient_wait = None
         return None
@@ -277,8 +290,7 @@ class MotionController:
         if mode in (COORD, TELEOP) and not all(j.is_homed for j in self.joints):
             return "all joints must be homed before going into coordinated mode"
         if mode == TELEOP:
-            for planner, value in zip(self.axis_planners, self.carte_pos_cmd, strict=True):
-                planner.reset(value)
+            self._reset_teleop()
         if mode == COORD:
             self.tp.set_position(list(self.carte_pos_cmd))
         else:
@@ -293,7 +305,7 @@ class MotionController:
             or self._orient_wait is not None
             or self.homing.is_homing
             or any(j.planner.is_active for j in self.joints)
-            or any(p.is_active for p in self.axis_planners)
+            or self._is_teleop_moving()
         )
 
     # ---------------------------------------------------------------- jogs (free mode)
@@ -335,6 +347,105 @@ class MotionController:
 
     def _has_axis(self, index: int) -> bool:
         return bool(getattr(self.kins, "axis_mask", 0b111) >> index & 1)
+
+    # ---------------------------------------------------------------- teleop (MOT-016)
+    def _teleop_vector(self, cmd: emc.EMC_TRAJ_SET_TELEOP_VECTOR) -> str | None:
+        """SET_TELEOP_VECTOR (MOT-055): the cartesian velocity teleop mode follows, on top
+        of any axis jogs; a zero vector brings it to a coordinated stop."""
+        if self.mode != TELEOP:
+            return "teleop vector needs teleop mode"
+        if not self.is_enabled:
+            return "teleop vector needs motion enabled"
+        vector = _pose(cmd.vector).as_tuple()
+        if any(vector) and self.is_jog_inhibited:
+            return "jogging is inhibited (motion.jog-inhibit)"
+        for index, value in enumerate(vector):
+            if value and not self._has_axis(index):
+                return f"axis {AXIS_LETTERS[index].upper()} is not used by this machine"
+        self.teleop.set_velocity(vector)
+        return None
+
+    def _reset_teleop(self) -> None:
+        """Teleop at rest where the pose is (entering teleop MOT-027, motion off)."""
+        for planner, value in zip(self.axis_planners, self.carte_pos_cmd, strict=True):
+            planner.reset(value)
+        self.teleop.reset(list(self.carte_pos_cmd))
+        self.joint_limiter.reset([j.pos_cmd for j in self.joints])
+
+    def _stop_teleop(self) -> None:
+        """ABORT or jog-stop in teleop (MOT-021): the jogs' velocities join the vector's,
+        and the vector planner brings the sum to zero along a straight line in velocity
+        space, so all axes stop together within the axis and joint limits."""
+        jogs = self.axis_planners
+        self.teleop.vel = self.teleop.vel + np.array([p.vel for p in jogs])
+        self.teleop.abort()
+        for planner in jogs:
+            planner.reset(planner.pos)
+
+    def _is_teleop_moving(self) -> bool:
+        return self.teleop.is_moving or any(p.is_active or p.vel for p in self.axis_planners)
+
+    def _teleop_step(self, dt: float) -> None:
+        """One teleop period: the axis jogs and the teleop vector each plan their own
+        motion; their sum is carried out, slowed as a whole where a joint would exceed its
+        velocity or acceleration limit, and each planner goes on from its share of what
+        was carried out. Every planner's position is the commanded pose's."""
+        jogs, vector = self.axis_planners, self.teleop
+        start = vector.pos.copy()
+        jog_v0 = np.array([p.vel for p in jogs])
+        vector_v0 = vector.vel.copy()
+        jog_end = np.array([p.step(dt) for p in jogs])
+        vector_end = vector.step(dt)
+        jog_v1 = np.array([p.vel for p in jogs])
+        v0, v1 = jog_v0 + vector_v0, jog_v1 + vector.vel
+        end = jog_end + (vector_end - start)
+        if v0.any() or v1.any():
+            # a jog and the vector on one axis: neither planner alone brakes for its limits
+            is_jogging = (jog_v0 != 0) | (jog_v1 != 0)
+            is_vector_moving = (vector_v0 != 0) | (vector.vel != 0)
+            is_braking_planned = not (is_jogging & is_vector_moving).any()
+            limits = self._teleop_limits()
+            try:
+                fit = self.joint_limiter.fit(start, v0, v1, end, limits, dt, is_braking_planned)
+            except KinematicsError as exc:
+                self._fault(f"inverse kinematics failed: {exc}; motion stopped")
+                return
+            end = fit.end
+            if not fit.is_exact:
+                self._follow_fit(fit, jog_v0, jog_v1, vector_v0)
+            # jogs that have come as far as the soft limits let them end there
+            for planner in itertools.compress(jogs, fit.held.tolist()):
+                planner.reset(planner.pos)
+        for planner, value in zip(jogs, end.tolist(), strict=True):
+            planner.pos = value
+            if not planner.is_enabled:
+                planner.target = value
+        vector.pos = end.copy()
+        self._set_joints_from_pose(EmcPose(*end.tolist()))
+        self.joint_limiter.advance([j.pos_cmd for j in self.joints])
+
+    def _follow_fit(
+        self, fit: Fit, jog_v0: np.ndarray, jog_v1: np.ndarray, vector_v0: np.ndarray
+    ) -> None:
+        """Each teleop planner's velocity becomes its share of the slowed motion."""
+        jog_vel = fit.velocity(jog_v0, jog_v1)
+        for planner, vel in zip(self.axis_planners, jog_vel.tolist(), strict=True):
+            planner.vel = vel
+        self.teleop.vel = fit.velocity(vector_v0, self.teleop.vel)
+
+    def _teleop_limits(self) -> JointLimits:
+        vector = self.teleop
+        is_overridden = self.is_override_limits
+        return JointLimits(
+            joint_max_vel=np.array([j.planner.max_vel for j in self.joints]),
+            joint_max_acc=np.array([j.planner.max_acc for j in self.joints]),
+            axis_max_acc=vector.max_acc,
+            axis_min=np.full(NUM_AXES, -math.inf) if is_overridden else vector.min_pos,
+            axis_max=np.full(NUM_AXES, math.inf) if is_overridden else vector.max_pos,
+        )
+
+    def _inverse_array(self, pose: np.ndarray) -> list[float]:
+        return self.kins.inverse(EmcPose(*pose.tolist()))
 
     # ---------------------------------------------------------------- coordinated moves
     def _require_coord(self) -> str | None:
@@ -495,6 +606,9 @@ class MotionController:
         else:
             self.axis_max_acc[axis] = cmd.acc
         self._apply_traj_limits()
+        self.teleop.set_limits(
+            self.axis_max_vel, self.axis_max_acc, self.axis_min_limit, self.axis_max_limit
+        )
         vel, acc = self.axis_max_vel[axis], self.axis_max_acc[axis]
         self.axis_planners[axis].set_limits(
             vel if math.isfinite(vel) else DEFAULT_JOINT_VEL,
@@ -771,7 +885,7 @@ class MotionController:
                 self.errors.append(error)
             self._set_joints_from_pose(EmcPose(*position.tolist()))
         elif self.mode == TELEOP:
-            self._set_joints_from_pose(EmcPose(*(p.step(dt) for p in self.axis_planners)))
+            self._teleop_step(dt)
         else:
             self.homing.step(dt)
             error = self.homing.take_error()
@@ -814,11 +928,19 @@ class MotionController:
         self._jog_stops = (is_stop, is_stop_immediate)
         if self.homing.is_homing or self.mode == COORD:
             return
-        planners = [j.planner for j in self.joints] if self.mode == FREE else self.axis_planners
-        if is_stop_immediate and not was_stop_immediate:
+        is_stop_now = is_stop_immediate and not was_stop_immediate
+        is_stop_braking = is_stop and not was_stop
+        if self.mode == TELEOP:  # the teleop vector stops too (a cartesian jog)
+            if is_stop_now:
+                self._reset_teleop()
+            elif is_stop_braking:
+                self._stop_teleop()
+            return
+        planners = [j.planner for j in self.joints]
+        if is_stop_now:
             for planner in planners:
                 planner.reset(planner.pos)
-        elif is_stop and not was_stop:
+        elif is_stop_braking:
             for planner in planners:
                 planner.stop()
 
@@ -827,7 +949,7 @@ class MotionController:
         """motion.jog-is-active: a joint (free mode) or an axis (teleop mode) jogs."""
         if self.mode == FREE and not self.homing.is_homing:
             return any(j.planner.is_active for j in self.joints)
-        return self.mode == TELEOP and any(p.is_active for p in self.axis_planners)
+        return self.mode == TELEOP and self._is_teleop_moving()
 
     def _wheel_delta(self, key: tuple[str, int], wheel: WheelInputs) -> int:
         last = self._wheel_counts.get(key, wheel.counts)
@@ -963,7 +1085,7 @@ class MotionController:
         if self.mode == COORD:
             return self.tp.vel
         if self.mode == TELEOP:
-            speeds = [p.vel for p in self.axis_planners]
+            speeds = (self.teleop.vel + [p.vel for p in self.axis_planners]).tolist()
             xyz = math.hypot(*speeds[:3])
             return xyz or math.hypot(*speeds[3:])
         return 0.0
@@ -1087,6 +1209,7 @@ _HANDLERS: dict[type, Callable[[MotionController, emc.NMLmsg], str | None]] = {
     emc.EMC_TRAJ_ABORT: MotionController._abort,
     emc.EMC_MOTION_ABORT: MotionController._abort,
     emc.EMC_TRAJ_SET_MODE: MotionController._set_mode,
+    emc.EMC_TRAJ_SET_TELEOP_VECTOR: MotionController._teleop_vector,
     emc.EMC_JOG_CONT: MotionController._jog,
     emc.EMC_JOG_INCR: MotionController._jog,
     emc.EMC_JOG_ABS: MotionController._jog,

@@ -5,17 +5,32 @@ The vector is scaled down as a whole so that no axis exceeds its velocity limit,
 velocity changes along a straight line in velocity space, as fast as the tightest axis
 acceleration allows: every axis starts and stops together (a coordinated stop, MOT-021).
 Near an axis position limit the whole vector slows so that axis stops at the limit.
-The motion component converts the pose to joints through inverse kinematics.
+
+``JointLimiter`` keeps the joints within their own limits: the motion component adds up
+what the teleop planners propose for one servo period (the axis jogs and the vector), and
+the limiter slows that cartesian motion as a whole, direction kept, wherever a joint would
+exceed its velocity or acceleration limit. It looks at the joints only through inverse
+kinematics (finite differences of joint positions per period), so it works for any
+kinematics module: exactly for linear ones (trivkins, corexy), to first order within one
+period for the others.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
+from motion.free import braking_speed
 from motion.pose import NUM_AXES
+
+# relative: rounding in finite differences of joint positions never counts as a limit crossed
+LIMIT_TOLERANCE = 1e-7
+# the joint limiter plans its braking for the soft limits at this fraction of the joints'
+# deceleration, keeping the rest for what it cannot plan (an ABORT, a new jog mid-braking)
+BRAKING_MARGIN = 0.95
 
 
 class TeleopPlanner:
@@ -26,16 +41,31 @@ class TeleopPlanner:
         axis_min: Sequence[float] | None = None,
         axis_max: Sequence[float] | None = None,
     ) -> None:
-        self.max_vel = _positive_vector("axis max velocity", axis_max_vel)
-        self.max_acc = _positive_vector("axis max acceleration", axis_max_acc)
-        self.min_pos = np.full(NUM_AXES, -math.inf) if axis_min is None else _vector(axis_min)
-        self.max_pos = np.full(NUM_AXES, math.inf) if axis_max is None else _vector(axis_max)
-        if (self.min_pos > self.max_pos).any():
-            raise ValueError("axis minimum limits must not exceed the maximum limits")
+        self.set_limits(
+            axis_max_vel,
+            axis_max_acc,
+            [-math.inf] * NUM_AXES if axis_min is None else axis_min,
+            [math.inf] * NUM_AXES if axis_max is None else axis_max,
+        )
         self.pos = np.zeros(NUM_AXES)
         self.vel = np.zeros(NUM_AXES)
         self.target_vel = np.zeros(NUM_AXES)
         self.scale = 1.0
+
+    def set_limits(
+        self,
+        axis_max_vel: Sequence[float],
+        axis_max_acc: Sequence[float],
+        axis_min: Sequence[float],
+        axis_max: Sequence[float],
+    ) -> None:
+        """The [AXIS_L] velocity, acceleration and position limits (infinite: none)."""
+        max_vel = _positive_vector("axis max velocity", axis_max_vel)
+        max_acc = _positive_vector("axis max acceleration", axis_max_acc)
+        min_pos, max_pos = _vector(axis_min), _vector(axis_max)
+        if (min_pos > max_pos).any():
+            raise ValueError("axis minimum limits must not exceed the maximum limits")
+        self.max_vel, self.max_acc, self.min_pos, self.max_pos = max_vel, max_acc, min_pos, max_pos
 
     def reset(self, pos: Sequence[float]) -> None:
         """At rest at ``pos`` with a zero velocity command (entering teleop, MOT-027)."""
@@ -45,7 +75,10 @@ class TeleopPlanner:
 
     def set_velocity(self, vel: Sequence[float]) -> None:
         """SET_TELEOP_VECTOR: the desired velocity of every axis."""
-        self.target_vel = _vector(vel)
+        values = [float(v) for v in vel]
+        if not all(map(math.isfinite, values)):
+            raise ValueError("teleop velocities must be finite numbers")
+        self.target_vel = _vector(values)
 
     def abort(self) -> None:
         """ABORT in teleop: a coordinated stop within the acceleration limits (MOT-021)."""
@@ -56,25 +89,243 @@ class TeleopPlanner:
         return bool(self.vel.any())
 
     def step(self, dt: float) -> np.ndarray:
+        if not (self.target_vel.any() or self.vel.any()):
+            return self.pos  # at rest, and staying there
         want = self.target_vel * self.scale
         want = want * _fit(np.abs(want), self.max_vel)
-        # brake for the position limits: per axis, the speed that still stops at the limit
-        room = np.where(want > 0, self.max_pos - self.pos, self.pos - self.min_pos)
-        room = np.maximum(room, 0.0)
-        stop_speed = np.sqrt(2.0 * self.max_acc * room)
-        want = want * _fit(np.abs(want), stop_speed)
+        # brake for the position limits along the line, at that line's deceleration
+        line_acc = _line_limit(want, np.abs(want), self.max_acc)
+        stop_speed = _stop_speed(self.pos, self.vel, want, line_acc, self.min_pos, self.max_pos, dt)
+        want = want * _fit(np.array([np.linalg.norm(want)]), np.array([stop_speed]))
         change = want - self.vel
         step = change * _fit(np.abs(change), self.max_acc * dt)
         new_vel = self.vel + step
         new_pos = self.pos + 0.5 * (self.vel + new_vel) * dt
-        self.pos = np.clip(new_pos, self.min_pos, self.max_pos)
+        # stop at a limit, but never pull in an axis that is already beyond one
+        low, high = np.minimum(self.min_pos, self.pos), np.maximum(self.max_pos, self.pos)
+        self.pos = np.clip(new_pos, low, high)
         self.vel = np.where(self.pos == new_pos, new_vel, 0.0)
         return self.pos
 
 
-def _fit(amount: np.ndarray, limit: np.ndarray) -> float:
-    """The largest factor <= 1 that keeps every ``amount`` within its ``limit``."""
-    over = amount > limit
+@dataclass(frozen=True)
+class JointLimits:
+    """What the joints and axes allow, for one servo period of ``JointLimiter.fit``."""
+
+    joint_max_vel: np.ndarray
+    joint_max_acc: np.ndarray
+    axis_max_acc: np.ndarray
+    axis_min: np.ndarray  # soft limits; -inf / inf where overridden or absent
+    axis_max: np.ndarray
+
+
+@dataclass(frozen=True)
+class Fit:
+    """One servo period of teleop motion within the joint limits.
+
+    The planners proposed to go from velocity ``v0`` to ``v1``. The motion aims at
+    ``scale * v1`` (the proposal slowed as a whole for the joint velocity limits), or,
+    when it must brake for a soft limit, at ``keep * v0`` (braking along its line, what
+    the planners proposed waits); it goes ``fraction`` of the way from ``v0`` to that
+    aim (joint and axis acceleration limits) and ends at ``end``. ``held``: the axes
+    whose planners proposed to move on from rest against a soft limit they have reached."""
+
+    scale: float
+    keep: float
+    fraction: float
+    end: np.ndarray
+    held: np.ndarray
+
+    @property
+    def is_exact(self) -> bool:
+        """The planners' own proposal is carried out unchanged."""
+        return self.scale == 1.0 and self.keep == 0.0 and self.fraction == 1.0
+
+    def velocity(self, v0: np.ndarray, v1: np.ndarray) -> np.ndarray:
+        """The velocity carried out, of the whole motion or of one planner's share."""
+        return v0 + self.fraction * (self.scale * v1 + self.keep * v0 - v0)
+
+
+class JointLimiter:
+    """Slows a period's cartesian motion as a whole so no joint exceeds its max velocity or
+    max acceleration, measured as finite differences of the joint positions per period."""
+
+    def __init__(self, inverse: Callable[[np.ndarray], Sequence[float]]) -> None:
+        self.inverse = inverse
+        self.joints = np.zeros(0)  # joint positions now
+        self.prev_joints = np.zeros(0)  # and one period earlier
+
+    def reset(self, joints: Sequence[float]) -> None:
+        """The joints stand still at ``joints``."""
+        self.joints = np.array(joints, dtype=float)
+        self.prev_joints = self.joints.copy()
+
+    def advance(self, joints: Sequence[float]) -> None:
+        """One period later the joints are at ``joints``."""
+        self.prev_joints, self.joints = self.joints, np.array(joints, dtype=float)
+
+    def fit(
+        self,
+        pos: np.ndarray,
+        v0: np.ndarray,
+        v1: np.ndarray,
+        end: np.ndarray,
+        limits: JointLimits,
+        dt: float,
+        is_braking_planned: bool = True,
+    ) -> Fit:
+        """The motion of one period from ``pos``: the planners move from velocity ``v0`` to
+        ``v1``, to ``end`` (their own integration; used unchanged when the limits allow).
+        ``is_braking_planned``: each moving axis has one planner, which brakes for its soft
+        limits itself (false when a jog and the vector move the same axis)."""
+        joints = self.joints
+        n = len(joints)
+        joint_vel, joint_acc = limits.joint_max_vel[:n], limits.joint_max_acc[:n]
+        near = pos + v0 * dt  # fraction 0: the velocity kept
+        q_near = np.asarray(self.inverse(near))[:n]
+        joint_v0 = (q_near - joints) / dt  # joint velocities of v0 and of v1, held
+        joint_v1 = np.zeros(n)
+        scale, keep = 1.0, 0.0
+        if v1.any():
+            joint_v1 = (np.asarray(self.inverse(pos + v1 * dt))[:n] - joints) / dt
+            scale = _fit(np.abs(joint_v1), joint_vel, LIMIT_TOLERANCE)
+        # the soft limits, on the line of the motion (of the proposal when at rest)
+        is_moving = bool(v0.any())
+        line, joint_line = (v0, joint_v0) if is_moving else (scale * v1, scale * joint_v1)
+        stop_speed, line_acc = _soft_limit_speed(
+            pos, v0, line, joint_line, limits, dt, is_braking_planned
+        )
+        speed, current = float(np.linalg.norm(scale * v1)), float(np.linalg.norm(v0))
+        if max(speed, current) > stop_speed * (1.0 + LIMIT_TOLERANCE):
+            if is_moving:  # brake along the line; the planners' new directions wait
+                scale, keep = 0.0, min(stop_speed, speed) / current
+            else:
+                scale *= stop_speed / speed
+        held = np.zeros(len(pos), dtype=bool)
+        if not is_moving and scale == 0.0 and v1.any():
+            room = np.where(v1 > 0, limits.axis_max - pos, pos - limits.axis_min)
+            direction = np.abs(v1) / float(np.linalg.norm(v1))
+            held = (direction > _NEGLIGIBLE) & (room <= _stop_reserve(line_acc, dt) * direction)
+        target_vel = scale * v1 + keep * v0
+        joint_target = scale * joint_v1 + keep * joint_v0
+        far = end if scale == 1.0 and keep == 0.0 else pos + 0.5 * (v0 + target_vel) * dt
+        # joint velocity and acceleration are affine in the fraction between near and far
+        q_far = np.asarray(self.inverse(far))[:n]
+        fraction = min(
+            # the velocity change of each period within the accelerations, so that the
+            # finite differences (averages over two periods) are within them too, stop
+            # included
+            _fit(np.abs(joint_target - joint_v0), joint_acc * dt, LIMIT_TOLERANCE),
+            _fit(np.abs(target_vel - v0), limits.axis_max_acc * dt, LIMIT_TOLERANCE),
+            # and the finite differences themselves (a planner's own integration may differ)
+            _largest_fraction((q_near - joints) / dt, (q_far - q_near) / dt, joint_vel),
+            _largest_fraction(
+                (q_near - 2.0 * joints + self.prev_joints) / dt**2,
+                (q_far - q_near) / dt**2,
+                joint_acc,
+            ),
+        )
+        if fraction == 1.0:
+            return Fit(scale, keep, 1.0, far, held)
+        return Fit(scale, keep, fraction, near + fraction * (far - near), held)
+
+
+def _soft_limit_speed(
+    pos: np.ndarray,
+    v0: np.ndarray,
+    line: np.ndarray,
+    joint_line: np.ndarray,
+    limits: JointLimits,
+    dt: float,
+    is_braking_planned: bool,
+) -> tuple[float, float]:
+    """The highest speed along ``line`` (a velocity; ``joint_line`` the joints' at it)
+    that still stops at the soft limits decelerating as the axes and joints allow, and
+    that deceleration.
+
+    The planners brake for the soft limits themselves, at their axes' acceleration: too
+    late only where the joints decelerate slower along the line, or where two planners
+    move one axis (``is_braking_planned`` false); elsewhere no limit (infinite)."""
+    n = len(joint_line)
+    axis_line_acc = _line_limit(line, np.abs(line), limits.axis_max_acc)
+    joint_line_acc = _line_limit(line, np.abs(joint_line), limits.joint_max_acc[:n])
+    if is_braking_planned and joint_line_acc >= axis_line_acc * (1.0 - LIMIT_TOLERANCE):
+        return math.inf, math.inf
+    line_acc = min(axis_line_acc, joint_line_acc) * BRAKING_MARGIN
+    return _stop_speed(pos, v0, line, line_acc, limits.axis_min, limits.axis_max, dt), line_acc
+
+
+# components of a direction smaller than this do not move (and are not divided by)
+_NEGLIGIBLE = 1e-12
+
+
+def _line_limit(vel: np.ndarray, rates: np.ndarray, limits: np.ndarray) -> float:
+    """The largest speed or acceleration along the direction of ``vel`` that keeps each
+    ``rates`` entry (what that entry does at velocity ``vel``) within its ``limits``."""
+    speed = float(np.linalg.norm(vel))
+    if not speed > 0.0:
+        return math.inf
+    per_speed = rates / speed
+    used = per_speed > _NEGLIGIBLE
+    return float(np.min(limits[used] / per_speed[used])) if used.any() else math.inf
+
+
+def _stop_speed(
+    pos: np.ndarray,
+    vel: np.ndarray,
+    line: np.ndarray,
+    line_acc: float,
+    min_pos: np.ndarray,
+    max_pos: np.ndarray,
+    dt: float,
+) -> float:
+    """The highest speed along the direction of ``line`` for the next period that still
+    lets the motion, now at velocity ``vel``, stop before every position limit ahead
+    decelerating at ``line_acc``; infinite when no limit is ahead.
+
+    ``braking_speed`` plans a continuous stop after the next period; stopping in whole
+    periods can take up to ``line_acc * dt**2 / 8`` further, which is kept in reserve
+    (the motion may stop that much short of the limit)."""
+    speed = float(np.linalg.norm(line))
+    if not speed > 0.0 or math.isinf(line_acc):
+        return math.inf
+    direction = np.abs(line) / speed
+    moving = direction > _NEGLIGIBLE
+    room = np.where(line > 0, max_pos - pos, pos - min_pos)[moving]
+    along = np.maximum(room, 0.0) / direction[moving]  # distance to each limit on the line
+    if not np.isfinite(along).any():
+        return math.inf
+    along = np.maximum(along - _stop_reserve(line_acc, dt), 0.0)
+    current = float(np.linalg.norm(vel))
+    stop = min(braking_speed(dist, current, line_acc, dt) for dist in along.tolist())
+    return max(stop, 0.0)
+
+
+def _stop_reserve(line_acc: float, dt: float) -> float:
+    """How much further than a continuous stop a stop in whole periods may take."""
+    return line_acc * dt * dt / 8.0
+
+
+def _largest_fraction(start: np.ndarray, slope: np.ndarray, limit: np.ndarray) -> float:
+    """The largest t in [0, 1] with |start + t * slope| <= limit for every entry that is
+    within its limit at t = 0 (one already beyond cannot be helped by a smaller t); 1 when
+    every entry is within its limit (give or take LIMIT_TOLERANCE) at t = 1."""
+    tolerance = 1.0 + LIMIT_TOLERANCE
+    if (np.abs(start + slope) <= limit * tolerance).all():
+        return 1.0
+    fraction = 1.0
+    for value, rate, bound in zip(start.tolist(), slope.tolist(), limit.tolist(), strict=True):
+        if abs(value) > bound * tolerance or rate == 0.0:
+            continue
+        room = (bound - value) if rate > 0 else (-bound - value)
+        fraction = min(fraction, room / rate)
+    return max(fraction, 0.0)
+
+
+def _fit(amount: np.ndarray, limit: np.ndarray, tolerance: float = 0.0) -> float:
+    """The largest factor <= 1 that keeps every ``amount`` within its ``limit``; 1 while
+    none exceeds its limit by more than the relative ``tolerance``."""
+    over = amount > limit * (1.0 + tolerance)
     if not over.any():
         return 1.0
     return float(np.min(limit[over] / amount[over]))

@@ -723,6 +723,13 @@ class EMC_TRAJ_SET_TELEOP_ENABLE(EMC_TRAJ_CMD_MSG, type_id=230):
     enable: i32
 
 
+class EMC_TRAJ_SET_TELEOP_VECTOR(EMC_TRAJ_CMD_MSG, type_id=231):
+    """LinuxCNC 2.7's (2.9 dropped it, MOT-013): the cartesian velocity teleop mode
+    follows, per axis in machine units per second (MOT-016, MOT-055)."""
+
+    vector: EmcPose
+
+
 class EMC_TRAJ_SET_SPINDLESYNC(EMC_TRAJ_CMD_MSG, type_id=232):
     spindle: i32
     feed_per_revolution: f64

@@ -245,7 +245,8 @@ class Task:
     def _forward(self, cmd: emc.NMLmsg) -> str | None:
         """Manual commands: motion's and iocontrol's own, sent on when allowed."""
         if is_motion_type(cmd.TYPE):
-            if isinstance(cmd, emc.EMC_JOG_CMD_MSG | emc.EMC_JOINT_HOME | emc.EMC_JOINT_UNHOME):
+            # manual motion: jogs, homing and the teleop vector (MOT-055)
+            if isinstance(cmd, MANUAL_MOTION):
                 problem = self._require(state=STATE.ON, mode=MODE.MANUAL)
                 if problem:
                     return problem
@@ -791,6 +792,15 @@ class Task:
                 atomic_write_text(self.setup.position_file, text)
             except OSError as exc:
                 log.error("cannot write %s: %s", self.setup.position_file, exc)
+
+
+# Motion commands an operator gives in manual mode, with the machine on
+MANUAL_MOTION = (
+    emc.EMC_JOG_CMD_MSG,
+    emc.EMC_JOINT_HOME,
+    emc.EMC_JOINT_UNHOME,
+    emc.EMC_TRAJ_SET_TELEOP_VECTOR,
+)
 
 
 # Motion commands of a program that go out only once every move before them is done, as

@@ -277,6 +277,17 @@ class command:  # LinuxCNC's name: linuxcnc.command
     def teleop_enable(self, enable: int) -> None:
         self._send(emc.EMC_TRAJ_SET_TELEOP_ENABLE(enable=_int(enable)))
 
+    def teleop_vector(
+        self, x: float, y: float, z: float, a: float = 0.0, b: float = 0.0, c: float = 0.0
+    ) -> None:
+        """Teleop mode: move at this cartesian velocity, per axis in machine units per
+        second (LinuxCNC 2.7's; all zero stops). Joint and axis limits slow it as a whole."""
+        message = emc.EMC_TRAJ_SET_TELEOP_VECTOR()
+        vector = message.vector
+        vector.tran.x, vector.tran.y, vector.tran.z = _float(x), _float(y), _float(z)
+        vector.a, vector.b, vector.c = _float(a), _float(b), _float(c)
+        self._send(message)
+
     def traj_mode(self, mode: int) -> None:
         """TRAJ_MODE_FREE, TRAJ_MODE_COORD or TRAJ_MODE_TELEOP."""
         self._send(emc.EMC_TRAJ_SET_MODE(mode=_int(mode)))
