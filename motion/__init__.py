@@ -8,7 +8,8 @@ period by the realtime motion component:
 - ``motion.free``: the per-joint trapezoidal free-mode planner and its jog rules.
 - ``motion.tp``: the coordinated-mode trajectory planner (replaceable, ARCH-008), and
   ``motion.tp.naivecam`` for G64 Q.
-- ``motion.teleop``: the teleop velocity-vector planner.
+- ``motion.teleop``: the teleop velocity-vector planner, and the joint limiter that slows
+  teleop motion (axis jogs plus vector) as a whole to keep every joint within its limits.
 - ``motion.homing``: the per-joint homing state machine (replaceable, ARCH-008).
 - ``motion.joint``: the joint record: position forms, backlash, leadscrew compensation,
   following error.

@@ -269,6 +269,17 @@ def _jog(shell: Shell, text: str) -> None:
         shell.send("jog", cnc.JOG_CONTINUOUS, jjogmode, index, sign * velocity)
 
 
+@command(
+    "vector VX VY VZ [VA VB VC]",
+    "move at a cartesian velocity (teleop mode)",
+    "Teleop mode: move at this velocity, per axis in units per minute, until 'vector 0 0 0'. "
+    "Joint and axis limits slow it as a whole, keeping its direction.",
+)
+def _vector(shell: Shell, text: str) -> None:
+    speeds = [real(word, "speed") / 60.0 for word in words(text, 3, 6)]
+    shell.send("teleop_vector", *speeds)
+
+
 def _jog_speed(shell: Shell, given: list[str], is_axis: bool, index: int) -> float:
     """The jog speed in units per second (what the API takes): the SPEED given in units
     per minute, else the INI's default for linear or angular jogs (units per second)."""

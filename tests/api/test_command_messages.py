@@ -56,6 +56,11 @@ CASES: list[tuple[Any, str, dict[str, Any]]] = [
         {"joint_or_axis": 0, "jjogmode": 1, "vel": 10.0, "incr": 0.1},
     ),
     (lambda c: c.teleop_enable(1), "EMC_TRAJ_SET_TELEOP_ENABLE", {"enable": 1}),
+    (
+        lambda c: c.teleop_vector(1, -2, 3.5, 0, 0, 4),
+        "EMC_TRAJ_SET_TELEOP_VECTOR",
+        {"vector": {"tran": {"x": 1.0, "y": -2.0, "z": 3.5}, "a": 0.0, "b": 0.0, "c": 4.0}},
+    ),
     (lambda c: c.traj_mode(cnc.TRAJ_MODE_FREE), "EMC_TRAJ_SET_MODE", {"mode": 1}),
     (lambda c: c.feedrate(1.5), "EMC_TRAJ_SET_SCALE", {"scale": 1.5}),
     (lambda c: c.rapidrate(0.25), "EMC_TRAJ_SET_RAPID_SCALE", {"scale": 0.25}),

@@ -75,6 +75,7 @@ def test_a_script_file_runs_every_kind_of_command(fake_task, run_ui, tmp_path: P
         "mode manual; home all\n"
         "jog 0 incr 0,5 120\n"  # 0.5 units at 120 units/min = 2 units/s, decimal comma
         "jog Y - 30; jog y stop\n"
+        "vector 600 -300 0\n"  # units/min: 10 and -5 units/s
         "feed 75,5%\n"
         "spindle fwd\n"  # at the programmed S (1000 in the fake task's settings)
         "flood on\n"
@@ -83,8 +84,8 @@ def test_a_script_file_runs_every_kind_of_command(fake_task, run_ui, tmp_path: P
     )
     result = run_ui("sh", str(script))
     assert result.returncode == 0, result
-    assert result.lines.count("DONE") == 16  # one per command
-    received = kinds_and_fields([task.next_command() for _ in range(16)])  # open sends two
+    assert result.lines.count("DONE") == 17  # one per command
+    received = kinds_and_fields([task.next_command() for _ in range(17)])  # open sends two
     assert received == [
         ("EMC_TASK_SET_STATE", {"state": 2}),
         ("EMC_TASK_SET_STATE", {"state": 4}),
@@ -93,6 +94,10 @@ def test_a_script_file_runs_every_kind_of_command(fake_task, run_ui, tmp_path: P
         ("EMC_JOG_INCR", {"joint_or_axis": 0, "incr": 0.5, "vel": 2.0, "jjogmode": 1}),
         ("EMC_JOG_CONT", {"joint_or_axis": 1, "vel": -0.5, "jjogmode": 0}),
         ("EMC_JOG_STOP", {"joint_or_axis": 1, "jjogmode": 0}),
+        (
+            "EMC_TRAJ_SET_TELEOP_VECTOR",
+            {"vector": {"tran": {"x": 10.0, "y": -5.0, "z": 0.0}} | dict.fromkeys("abcuvw", 0.0)},
+        ),
         ("EMC_TRAJ_SET_SCALE", {"scale": 0.755}),
         (
             "EMC_SPINDLE_ON",
@@ -175,6 +180,7 @@ def test_a_missing_script_or_machine_file_is_one_line(run_ui, tmp_path: Path) ->
         ("jog 0 sideways", "ERROR: jog: 'sideways' is not one of +|-"),
         ("jog Q + 10", "ERROR: jog: joint: 'Q' is not a whole number"),
         ("jog 0 incr", "ERROR: jog: expects 3 to 4 arguments"),
+        ("vector 1 2", "ERROR: vector: expects 3 to 6 arguments"),
         ("feed 1,000.5", "ERROR: feed: percent: '1,000.5' is not a number (use one"),
         ("feed -5", "ERROR: feed: percent must be at least 0"),
         ("mdi", "ERROR: mdi: expects a line of G-code (usage: mdi GCODE)"),
