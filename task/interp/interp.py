@@ -883,6 +883,12 @@ class Interpreter(
 
     def _fast_assign(self, _unused: None) -> int:
         """Execute a line of parameter settings taken by its plan (as _execute would)."""
+        self.apply_parameter_assignments()
+        return INTERP_OK
+
+    def apply_parameter_assignments(self) -> None:
+        """Set the parameters the line read assigned: RS274/NGC sets them all together,
+        after the line is read, so ``#1=2 #2=#1`` reads the old #1."""
         pars = self.parameters
         for index, value in self.parameter_assignments:
             pars[index] = value
@@ -890,7 +896,6 @@ class Interpreter(
             for name, value in self.named_parameter_assignments:
                 self.store_named_param(name, value)
             self.named_parameter_assignments = []
-        return INTERP_OK
 
     def parse_line(self, line: str, block: Block) -> None:
         self.read_items(block, line)
@@ -955,13 +960,7 @@ class Interpreter(
             return INTERP_OK
         if self.skipping_o:
             return INTERP_OK
-        pars = self.parameters
-        for index, value in self.parameter_assignments:
-            pars[index] = value
-        if self.named_parameter_assignments:
-            for name, value in self.named_parameter_assignments:
-                self.store_named_param(name, value)
-            self.named_parameter_assignments = []
+        self.apply_parameter_assignments()
         if self.line_length != 0:
             return self.execute_block(block)
         return INTERP_OK

@@ -374,11 +374,7 @@ class MotionMixin:
                 self.convert_control_functions(blk)
             if self.call_level == exit_level:
                 break
-            for index, value in self.parameter_assignments:
-                self.parameters[index] = value
-            for name, value in self.named_parameter_assignments:
-                self.store_named_param(name, value)
-            self.named_parameter_assignments = []
+            self.apply_parameter_assignments()
             end = 0j if incremental else start
             center = 0j
             if blk.u_flag:
