@@ -578,17 +578,7 @@ class TrajectoryPlanner:
         if d <= 1e-9:
             return None
         arc = blend_arc(move, line1.end, line1.direction, line2.direction, radius, turn)
-        acc = min(line1.acc, line2.acc)
-        self._piece_limits(arc, min(line1.vplan, line2.vplan), acc)
-        if not _is_blend_faster(v1, v2, arc, d, acc):
-            return None
-        if is_running:  # the runtime must still be able to brake onto the arc's speed
-            room = line1.length - d - self._s - self.vel * self.cycle_time
-            if self.vel * self.vel > arc.vcap**2 + 2 * line1.acc * max(room, 0.0):
-                return None
-        line1.trim_end(d)
-        line2.trim_start(d)
-        return arc
+        return self._take_blend(arc, line1, line2, d, d, v1, v2, is_running)
 
     def _blend_curved(self, move: Move, p1: Piece, p2: Piece) -> ArcPiece | None:
         """Blend a G64 corner where an arc meets a line or another arc (flat circles and
@@ -631,9 +621,25 @@ class TrajectoryPlanner:
             d1 *= 0.98 * tolerance / deviation  # the deviation grows about as the trim
         else:
             return None
+        v1, v2 = min(p1.vplan, move.vel), min(p2.vplan, p2.move.vel)
+        return self._take_blend(arc, p1, p2, d1, d2, v1, v2, is_running)
+
+    def _take_blend(
+        self,
+        arc: ArcPiece,
+        p1: Piece,
+        p2: Piece,
+        d1: float,
+        d2: float,
+        v1: float,
+        v2: float,
+        is_running: bool,
+    ) -> ArcPiece | None:
+        """Trim ``d1`` off the end of ``p1`` and ``d2`` off the start of ``p2`` for
+        ``arc`` and return it, if the arc saves time over stopping at the corner (cruising
+        speeds ``v1``, ``v2``) and, when ``p1`` is running, it can still brake onto it."""
         acc = min(p1.acc, p2.acc)
         self._piece_limits(arc, min(p1.vplan, p2.vplan), acc)
-        v1, v2 = min(p1.vplan, move.vel), min(p2.vplan, p2.move.vel)
         if not _is_blend_faster(v1, v2, arc, 0.5 * (d1 + d2), acc):
             return None
         if is_running:  # the runtime must still be able to brake onto the arc's speed
