@@ -9,16 +9,14 @@ which overran 1 ms periods about once a second during a dense program.
 from __future__ import annotations
 
 import gc
-import math
 
 import pytest
 
 from motion.controller import COORD, FREE
-from motion.tp import TermCond, TrajectoryPlanner
+from motion.tp import TermCond
 from nml import emc
 from tests.motion.test_controller import enabled_homed, move, run
-
-AXES = 9
+from tests.motion.test_tp import Run, planner, pose
 
 
 def garbage() -> int:
@@ -26,33 +24,16 @@ def garbage() -> int:
     return gc.collect()
 
 
-def point(x: float, y: float, z: float = 0.0) -> list[float]:
-    return [x, y, z] + [0.0] * (AXES - 3)
-
-
-def planner() -> TrajectoryPlanner:
-    inf = [math.inf] * (AXES - 3)
-    return TrajectoryPlanner([30.0] * 3 + inf, [500.0] * 3 + inf, max_vel=50.0, max_acc=500.0)
-
-
-def run_out(tp: TrajectoryPlanner) -> None:
-    for _ in range(200_000):
-        if tp.is_done:
-            return
-        tp.step()
-    raise AssertionError("the planner did not finish its queue")
-
-
 @pytest.mark.parametrize("term", [TermCond.BLEND, TermCond.EXACT, TermCond.STOP])
 def test_planner_moves_that_ran_leave_no_cycles(collector_off, term) -> None:
     tp = planner()
     for i in range(200):
-        tp.add_line(point(0.1 * (i + 1), 0.1 * (i % 2)), 20.0, 30.0, 500.0, i, term, 0.05, False)
+        tp.add_line(pose(0.1 * (i + 1), 0.1 * (i % 2)), 20.0, 30.0, 500.0, i, term, 0.05, False)
         tp.step()
     # a half circle from where the lines end (X20 Y0.1), counter-clockwise about Z
     centre, normal = [20.0, 5.1, 0.0], [0.0, 0.0, 1.0]
-    tp.add_circle(point(20.0, 10.1), centre, normal, 0, 20.0, 30.0, 500.0, 300, term)
-    run_out(tp)
+    tp.add_circle(pose(20.0, 10.1), centre, normal, 0, 20.0, 30.0, 500.0, 300, term)
+    Run(tp).until_done()
     assert garbage() == 0
 
 

@@ -82,6 +82,17 @@ def distance_to_polyline(points: np.ndarray, vertices: np.ndarray) -> np.ndarray
     return best
 
 
+def assert_follows_polyline(run, vertices, term, tolerance) -> None:
+    """Within limits, ending at the last vertex, never farther from the polyline than G64
+    allows (P, else a quarter of the longest segment); on it exactly unless blending."""
+    run.assert_within_limits()
+    assert np.allclose(run.path[-1][:3], vertices[-1], atol=1e-9)
+    deviation = distance_to_polyline(run.path[:, :3], np.array(vertices))
+    lengths = np.linalg.norm(np.diff(np.array(vertices), axis=0), axis=1)
+    bound = tolerance if tolerance > 0 else 0.25 * lengths.max()
+    assert deviation.max() <= (bound if term == TermCond.BLEND else 0.0) + 1e-9
+
+
 def add_polyline(tp, vertices, feed=25.0, term=TermCond.BLEND, tolerance=0.0) -> None:
     for n, vertex in enumerate(vertices[1:], start=1):
         tp.add_line(pose(*vertex), feed, 53.34, AMAX, motion_id=n, term=term, tolerance=tolerance)
@@ -176,12 +187,7 @@ def test_any_polyline_stays_within_limits_and_tolerance(points, feed, tolerance,
     tp = planner()
     add_polyline(tp, vertices, feed=feed, term=term, tolerance=tolerance)
     run = Run(tp).until_done()
-    run.assert_within_limits()
-    assert np.allclose(run.path[-1][:3], vertices[-1], atol=1e-9)
-    deviation = distance_to_polyline(run.path[:, :3], np.array(vertices))
-    lengths = np.linalg.norm(np.diff(np.array(vertices), axis=0), axis=1)
-    bound = tolerance if tolerance > 0 else 0.25 * lengths.max()
-    assert deviation.max() <= (bound if term == TermCond.BLEND else 0.0) + 1e-9
+    assert_follows_polyline(run, vertices, term, tolerance)
 
 
 # ---------------------------------------------------------------------- arcs

@@ -12,7 +12,16 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from motion.tp import TermCond, TrajectoryPlanner
-from tests.motion.test_tp import AMAX, DT, LIMIT_A, LIMIT_V, Run, distance_to_polyline, pose
+from tests.motion.test_tp import (
+    AMAX,
+    DT,
+    LIMIT_A,
+    LIMIT_V,
+    Run,
+    assert_follows_polyline,
+    distance_to_polyline,
+    pose,
+)
 
 
 def stream(
@@ -108,9 +117,4 @@ def test_any_streamed_dense_polyline_stays_within_limits_and_tolerance(
     tp.set_position(pose(0.0, 0.0, 0.0))
     accelerations = [step[3] for step in steps]
     run = stream(tp, vertices, adds_per_period, feed, term, tolerance, pause_at, accelerations)
-    run.assert_within_limits()
-    assert np.allclose(run.path[-1][:3], vertices[-1], atol=1e-9)
-    deviation = distance_to_polyline(run.path[:, :3], np.array(vertices))
-    lengths = np.linalg.norm(np.diff(np.array(vertices), axis=0), axis=1)
-    bound = tolerance if tolerance > 0 else 0.25 * lengths.max()
-    assert deviation.max() <= (bound if term == TermCond.BLEND else 0.0) + 1e-9
+    assert_follows_polyline(run, vertices, term, tolerance)
