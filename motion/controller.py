@@ -300,12 +300,13 @@ class MotionController:
         return None
 
     def _is_moving(self) -> bool:
+        # (teleop motion only exists in teleop mode: leaving it waits for rest)
         return (
             not self.tp.is_done
             or self._orient_wait is not None
             or self.homing.is_homing
             or any(j.planner.is_active for j in self.joints)
-            or self._is_teleop_moving()
+            or (self.mode == TELEOP and self._is_teleop_moving())
         )
 
     # ---------------------------------------------------------------- jogs (free mode)

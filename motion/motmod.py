@@ -182,6 +182,14 @@ class Motmod:
             raise HalError(f"motmod: cannot connect to the NML buffers: {exc}") from None
         self.status = emc.EMC_MOTION_STAT()
         self.pending_errors: list[str] = []
+        self.hal = hal
+        # what _write_pins last wrote of the values that seldom change
+        self._written_generation = -1
+        self._joint_written: list[tuple] = [()] * len(self.joints)
+        self._motion_written: tuple = ()
+        self._digital_out_written: list[bool] = []
+        self._analog_out_written: list[float] = []
+        self._spindle_written: list[tuple] = [()] * len(self.spindles)
         count = len(self.joints)
         self.inputs = Inputs(
             motor_pos_fb=[0.0] * count,
@@ -267,37 +275,75 @@ class Motmod:
         self._publish()
 
     def _write_pins(self) -> None:
+        """Pins out. Values that change while moving are written every period; the rest
+        (enable, homing, spindle, I/O) only when they change, or when the HAL was edited
+        (a signal linked since may not hold the pin's value yet)."""
         controller = self.controller
-        for joint, pins in zip(controller.joints, self.joints, strict=True):
+        generation = self.hal.generation
+        is_all = generation != self._written_generation
+        self._written_generation = generation
+        is_enabled = controller.is_enabled
+        for index, (joint, pins) in enumerate(zip(controller.joints, self.joints, strict=True)):
             pins.pos_cmd = joint.pos_cmd
             pins.motor_pos_cmd = joint.motor_pos_cmd
-            pins.motor_offset = joint.motor_offset
             pins.pos_fb = joint.pos_fb
             pins.vel_cmd = joint.vel_cmd
             pins.f_error = joint.ferror
-            pins.amp_enable_out = controller.is_enabled
-            pins.homed = joint.is_homed
-            pins.homing = joint.is_homing
-            pins.in_position = not joint.planner.is_active
-            pins.index_enable = joint.is_index_enabled
-        pose = list(controller.carte_pos_cmd)
+            pins.index_enable = joint.is_index_enabled  # (an io pin: the encoder clears it)
+            state = (
+                is_enabled,
+                joint.is_homed,
+                joint.is_homing,
+                joint.planner.is_active,
+                joint.motor_offset,
+            )
+            if is_all or state != self._joint_written[index]:
+                self._joint_written[index] = state
+                pins.amp_enable_out = is_enabled
+                pins.homed = joint.is_homed
+                pins.homing = joint.is_homing
+                pins.in_position = not joint.planner.is_active
+                pins.motor_offset = joint.motor_offset
+        pose = controller.carte_pos_cmd.as_tuple()
         for index, pins in self.axes.items():
             pins.pos_cmd = pose[index]
+        tp = controller.tp
         motion = self.motion
-        motion.motion_enabled = controller.is_enabled
-        motion.in_position = controller.is_in_position
-        motion.coord_mode = controller.mode == COORD
-        motion.teleop_mode = controller.mode == TELEOP
-        motion.jog_is_active = controller.is_jogging
-        motion.program_line = controller.tp.motion_id
+        motion.program_line = tp.motion_id
         motion.current_vel = controller.current_vel
-        motion.distance_to_go = controller.tp.distance_to_go if controller.mode == COORD else 0.0
-        for index, value in enumerate(controller.digital_out):
-            motion.digital_out[index] = value
-        for index, value in enumerate(controller.analog_out):
-            motion.analog_out[index] = value
-        for spindle, pins in zip(controller.spindles, self.spindles, strict=True):
+        motion.distance_to_go = tp.distance_to_go if controller.mode == COORD else 0.0
+        state = (is_enabled, controller.is_in_position, controller.mode, controller.is_jogging)
+        if is_all or state != self._motion_written:
+            self._motion_written = state
+            motion.motion_enabled = is_enabled
+            motion.in_position = state[1]
+            motion.coord_mode = controller.mode == COORD
+            motion.teleop_mode = controller.mode == TELEOP
+            motion.jog_is_active = state[3]
+        if is_all or controller.digital_out != self._digital_out_written:
+            self._digital_out_written = list(controller.digital_out)
+            for index, value in enumerate(controller.digital_out):
+                motion.digital_out[index] = value
+        if is_all or controller.analog_out != self._analog_out_written:
+            self._analog_out_written = list(controller.analog_out)
+            for index, value in enumerate(controller.analog_out):
+                motion.analog_out[index] = value
+        spindles = zip(controller.spindles, self.spindles, strict=True)
+        for index, (spindle, pins) in enumerate(spindles):
+            pins.index_enable = spindle.is_index_enabled  # (an io pin: the encoder clears it)
             speed = spindle.speed_out
+            state = (
+                speed,
+                spindle.speed,
+                spindle.is_brake_on,
+                spindle.is_orienting,
+                spindle.orient_angle,
+                spindle.orient_mode,
+                spindle.is_locked,
+            )
+            if not is_all and state == self._spindle_written[index]:
+                continue
+            self._spindle_written[index] = state
             pins.speed_out = speed
             pins.speed_out_rps = speed / 60.0
             pins.speed_out_abs = abs(speed)
@@ -307,7 +353,6 @@ class Motmod:
             pins.forward = speed > 0
             pins.reverse = speed < 0
             pins.brake = spindle.is_brake_on
-            pins.index_enable = spindle.is_index_enabled
             pins.orient = spindle.is_orienting
             pins.orient_angle = spindle.orient_angle
             pins.orient_mode = bool(spindle.orient_mode)

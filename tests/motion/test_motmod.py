@@ -234,3 +234,22 @@ def test_spindle_and_wheel_pins_have_motion9s_names(machine: Task) -> None:
         assert hal.pin_value(hal.find_pin("spindle.0.at-speed")[1]) == 1  # default TRUE
     finally:
         hal.close()
+
+
+def test_a_signal_linked_while_running_gets_the_value_of_its_new_writer(machine: Task) -> None:
+    """Pins that seldom change are written when they change, and all of them again after a
+    HAL edit: a signal whose reader came first (postgui files link such signals while the
+    servo thread runs) must still show motion's value."""
+    configure(machine)
+    assert machine.send(emc.EMC_TRAJ_ENABLE()).status == RCS_STATUS.DONE
+    assert settled_pin("motion.motion-enabled", 1) == 1
+    for command in (
+        "net late-enable => joint.0.home-sw-in",  # the reader first: the signal stays FALSE
+        "net late-enable motion.motion-enabled",
+        "net late-spindle-brake => joint.1.home-sw-in",
+        "net late-spindle-brake spindle.0.brake",
+    ):
+        linked = run_cnc("halcmd", *command.split())
+        assert linked.returncode == 0, linked.stderr
+    assert settled_pin("joint.0.home-sw-in", 1) == 1
+    assert settled_pin("joint.1.home-sw-in", 1) == 1  # (brake on while the spindle is off)
