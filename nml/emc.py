@@ -667,6 +667,7 @@ class EMC_TRAJ_LINEAR_MOVE(EMC_TRAJ_CMD_MSG, type_id=220):
     acc: f64
     feed_mode: i32
     indexer_jnum: i32
+    id: i32  # motion id (the line motion reports); 0: the last EMC_TRAJ_SET_MOTION_ID's
 
 
 class EMC_TRAJ_CIRCULAR_MOVE(EMC_TRAJ_CMD_MSG, type_id=221):
@@ -679,6 +680,7 @@ class EMC_TRAJ_CIRCULAR_MOVE(EMC_TRAJ_CMD_MSG, type_id=221):
     ini_maxvel: f64
     acc: f64
     feed_mode: i32
+    id: i32  # motion id (the line motion reports); 0: the last EMC_TRAJ_SET_MOTION_ID's
 
 
 class EMC_TRAJ_SET_TERM_COND(EMC_TRAJ_CMD_MSG, type_id=222):
@@ -717,6 +719,7 @@ class EMC_TRAJ_PROBE(EMC_TRAJ_CMD_MSG, type_id=229):
     ini_maxvel: f64
     acc: f64
     probe_type: u8
+    id: i32  # motion id (the line motion reports); 0: the last EMC_TRAJ_SET_MOTION_ID's
 
 
 class EMC_TRAJ_SET_TELEOP_ENABLE(EMC_TRAJ_CMD_MSG, type_id=230):
@@ -760,6 +763,17 @@ class EMC_TRAJ_RIGID_TAP(EMC_TRAJ_CMD_MSG, type_id=237):
     ini_maxvel: f64
     acc: f64
     scale: f64
+    id: i32  # motion id (the line motion reports); 0: the last EMC_TRAJ_SET_MOTION_ID's
+
+
+# The moves that carry their motion id: task stamps it into the move rather than sending
+# EMC_TRAJ_SET_MOTION_ID before it (one command per move, as LinuxCNC's emcmotCommand.id).
+MOVES_WITH_MOTION_ID = (
+    EMC_TRAJ_LINEAR_MOVE,
+    EMC_TRAJ_CIRCULAR_MOVE,
+    EMC_TRAJ_PROBE,
+    EMC_TRAJ_RIGID_TAP,
+)
 
 
 class EMC_TRAJ_SET_RAPID_SCALE(EMC_TRAJ_CMD_MSG, type_id=238):

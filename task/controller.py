@@ -576,6 +576,8 @@ class Task:
                     return
             elif msg.KIND is MessageKind.OPERATOR:
                 self._write_error_channel(msg)
+            elif isinstance(msg, emc.EMC_TRAJ_SET_MOTION_ID) and self._stamp_next_move(msg.id):
+                pass  # the move that follows carries the id to motion
             elif is_motion_type(msg.TYPE):
                 motion = self.stat.motion
                 in_flight = self.last_motion_serial - motion.echo_serial_number
@@ -592,6 +594,16 @@ class Task:
                     return
             if self.queue:  # (an error above may have aborted the run and emptied it)
                 self.queue.popleft()
+
+    def _stamp_next_move(self, motion_id: int) -> bool:
+        """Give ``motion_id`` to the move queued right after it (as LinuxCNC's task fills
+        emcmotCommand.id); False when no move follows or the id is 0, which a move's
+        ``id`` cannot carry."""
+        queue = self.queue
+        if not motion_id or len(queue) < 2 or not isinstance(queue[1], emc.MOVES_WITH_MOTION_ID):
+            return False
+        queue[1].id = motion_id
+        return True
 
     def _start_system_command(self, msg: emc.NMLmsg) -> bool:
         """M100..M199: run the user's program and wait for it (TASK-011); True once it ran."""

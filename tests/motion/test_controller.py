@@ -122,6 +122,25 @@ def test_linear_moves_reach_their_end_and_report_in_position() -> None:
     assert [j.pos_cmd for j in motion.joints] == pytest.approx([10.0, 5.0, 0.0])
 
 
+def test_a_move_carries_its_own_motion_id_or_keeps_the_last_one() -> None:
+    """Task stamps the line into the move (one command per move, as LinuxCNC's
+    emcmotCommand.id); a move without one (id 0) runs under the last SET_MOTION_ID's."""
+    motion = enabled_homed()
+    stamped = move(150.0)
+    stamped.id = 7
+    assert motion.handle(stamped).startswith("Linear move on line 7 ")
+    motion.handle(emc.EMC_TRAJ_SET_MOTION_ID(id=3))
+    assert motion.handle(move(5.0)) is None
+    second = move(10.0)
+    second.id = 4
+    assert motion.handle(second) is None
+    seen = set()
+    for _ in range(2000):
+        run(motion, 1)
+        seen.add(motion.tp.motion_id)
+    assert seen >= {3, 4} and motion.tp.motion_id == 4
+
+
 def test_move_beyond_a_soft_limit_is_refused_before_it_starts() -> None:
     motion = enabled_homed()
     motion.handle(emc.EMC_TRAJ_SET_MOTION_ID(id=12))

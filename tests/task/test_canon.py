@@ -165,13 +165,14 @@ def test_motion_id_is_queued_only_when_the_line_changes() -> None:
     canon.STRAIGHT_TRAVERSE(5, 1, 0, 0, 0, 0, 0)
     canon.STRAIGHT_TRAVERSE(5, 2, 0, 0, 0, 0, 0)
     canon.STRAIGHT_TRAVERSE(6, 3, 0, 0, 0, 0, 0)
+    # (a move's own id stays 0 here: task stamps it when it sends the move)
     ids = [(type(m).__name__, getattr(m, "id", None)) for m in canon.out]
     assert ids == [
         ("EMC_TRAJ_SET_MOTION_ID", 5),
-        ("EMC_TRAJ_LINEAR_MOVE", None),
-        ("EMC_TRAJ_LINEAR_MOVE", None),
+        ("EMC_TRAJ_LINEAR_MOVE", 0),
+        ("EMC_TRAJ_LINEAR_MOVE", 0),
         ("EMC_TRAJ_SET_MOTION_ID", 6),
-        ("EMC_TRAJ_LINEAR_MOVE", None),
+        ("EMC_TRAJ_LINEAR_MOVE", 0),
     ]
     canon.ON_RESET()  # after an abort the line is announced again
     canon.STRAIGHT_TRAVERSE(6, 4, 0, 0, 0, 0, 0)
