@@ -211,6 +211,11 @@ class MotionController:
         self.term_cond = TermCond.BLEND
         self.tolerance = 0.0
         self.next_motion_id = 0
+        # A refused move leaves a hole in the path: what task queued after it must not run
+        # (it would start from the wrong place), so every command is refused, quietly,
+        # until task, which sees the refusal, aborts (LinuxCNC's task aborts the program)
+        # or motion starts afresh (_ENDS_A_REFUSED_PROGRAM).
+        self.is_after_refused_move = False
         self.motion_type = 0
         self.tool_offset = EmcPose()
         self.is_feed_override_enabled = True
@@ -229,14 +234,22 @@ class MotionController:
 
     # ================================================================ commands
     def handle(self, cmd: emc.NMLmsg) -> str | None:
-        """Carry out one command; ``None`` if done, else why it was refused."""
+        """Carry out one command; ``None`` if done, else why it was refused ("" when it
+        says nothing new: a command after a refused move, see ``is_after_refused_move``)."""
         handler = _HANDLERS.get(type(cmd))
         if handler is None:
             return f"motion does not handle {cmd.NAME}"
+        if self.is_after_refused_move:
+            if type(cmd) not in _ENDS_A_REFUSED_PROGRAM:
+                return ""
+            self.is_after_refused_move = False
         try:
-            return handler(self, cmd)
+            problem = handler(self, cmd)
         except (ValueError, KinematicsError) as exc:
-            return f"{cmd.NAME}: {exc}"
+            problem = f"{cmd.NAME}: {exc}"
+        if problem and isinstance(cmd, emc.MOVES_WITH_MOTION_ID):
+            self.is_after_refused_move = True
+        return problem
 
     def _joint(self, index: int) -> Joint:
         if not 0 <= index < len(self.joints):
@@ -1275,6 +1288,15 @@ _HANDLERS: dict[type, Callable[[MotionController, emc.NMLmsg], str | None]] = {
     emc.EMC_TRAJ_SET_SO_ENABLE: MotionController._settings,
     emc.EMC_TRAJ_SET_FH_ENABLE: MotionController._settings,
     emc.EMC_MOTION_ADAPTIVE: MotionController._settings,
+}
+# What ends a program whose move motion refused: task's abort, or a fresh start (motion
+# turned off or on, another mode).
+_ENDS_A_REFUSED_PROGRAM = {
+    emc.EMC_TRAJ_ABORT,
+    emc.EMC_MOTION_ABORT,
+    emc.EMC_TRAJ_DISABLE,
+    emc.EMC_TRAJ_ENABLE,
+    emc.EMC_TRAJ_SET_MODE,
 }
 
 __all__ = ["Inputs", "Joint", "MotionController"]

@@ -129,6 +129,7 @@ def test_a_move_carries_its_own_motion_id_or_keeps_the_last_one() -> None:
     stamped = move(150.0)
     stamped.id = 7
     assert motion.handle(stamped).startswith("Linear move on line 7 ")
+    assert motion.handle(emc.EMC_TRAJ_ABORT()) is None  # (as task does after a refusal)
     motion.handle(emc.EMC_TRAJ_SET_MOTION_ID(id=3))
     assert motion.handle(move(5.0)) is None
     second = move(10.0)
@@ -149,6 +150,23 @@ def test_move_beyond_a_soft_limit_is_refused_before_it_starts() -> None:
         "Linear move on line 12 would exceed joint 0's positive limit",
     ]
     assert motion.tp.queue_depth == 0
+
+
+def test_after_a_refused_move_everything_is_refused_quietly_until_an_abort() -> None:
+    """What task queued after a refused move must not run (it would start from the wrong
+    place): refused without a new message until task's ABORT (or motion off, on, or in
+    another mode)."""
+    motion = enabled_homed()
+    assert motion.handle(move(150.0))  # beyond X's limit
+    assert motion.handle(move(10.0)) == ""
+    assert motion.handle(emc.EMC_SPINDLE_ON(speed=1000.0)) == ""
+    assert motion.tp.queue_depth == 0 and motion.spindles[0].speed == 0.0
+    assert motion.handle(emc.EMC_TRAJ_ABORT()) is None
+    assert motion.handle(move(10.0)) is None
+    assert motion.handle(move(150.0))
+    assert motion.handle(emc.EMC_TRAJ_DISABLE()) is None
+    assert motion.handle(emc.EMC_TRAJ_ENABLE()) is None
+    assert motion.handle(emc.EMC_TRAJ_SET_MOTION_ID(id=5)) is None
 
 
 def test_circular_move_follows_the_radius() -> None:
