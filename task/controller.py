@@ -57,9 +57,11 @@ STATE = emc.EMC_TASK_STATE_ENUM
 EXEC = emc.EMC_TASK_EXEC_ENUM
 INTERP = emc.EMC_TASK_INTERP_ENUM
 READAHEAD = 50  # messages queued ahead of motion while reading a program
-# motion commands sent but not yet answered: motion reports its queue full while fewer than
-# its QUEUE_FULL_MARGIN (200) slots are free, so moves in flight always fit
-MAX_MOTION_IN_FLIGHT = 100
+# Motion commands sent but not yet answered. Motion reports its queue full while fewer than
+# its QUEUE_FULL_MARGIN (200) slots are free, so moves in flight always fit; and an ABORT
+# waits behind them in motion's command buffer (motion takes 2-4 a period), so few keep
+# abort quick: 100 delayed the stop by ~75 ms. Ten a task cycle outrun any program.
+MAX_MOTION_IN_FLIGHT = 10
 BUSY_POLL_S = 0.001  # how often task looks at motion while a program or MDI runs
 
 

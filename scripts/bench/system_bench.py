@@ -4,8 +4,10 @@
     python scripts/bench/system_bench.py [--ini configs/sim/mill.ini] [--no-lcnc]
 
 Prints JSON with ``startup_s``, ``poll_us_median``, ``mdi_rtt_ms_median``, ``mdi_rtt_ms_p90``,
-``first_motion_ms``, ``home_all_s``, and the same keys prefixed ``lcnc_`` when LinuxCNC's
-sim can be started here (../shared/reference: setup.sh done, run as root).
+``first_motion_ms``, ``home_all_s``, ``abort_slowdown_ms`` (from ``abort()`` during a
+program of short moves at 25 mm/s until the velocity drops, median of 3), and the same
+keys prefixed ``lcnc_`` when LinuxCNC's sim can be started here (../shared/reference:
+setup.sh done, run as root).
 
 The measurements are one function, ``measure(api)``, run once with ``import cnc`` and once
 with LinuxCNC's ``linuxcnc`` module (as user ``cnc`` with Debian's python3), so both
@@ -29,6 +31,12 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[2]
 REFERENCE = REPO.parent / "shared" / "reference"
 PROGRAM = "G21 G90\nG0 X1 Y1\nG1 X2 F600\nG0 X1\nM2\n"
+# 0.05 mm moves at 25 mm/s, aborted on the way (written beside PROGRAM as dense.ngc)
+DENSE_PROGRAM = (
+    "G21 G90 G64 G0 X0 Y0\nF1500\n"
+    + "".join(f"G1 X{0.05 * i:.2f} Y{0.001 * (i % 2):.3f}\n" for i in range(1, 1000))
+    + "M2\n"
+)
 
 
 def percentile(values: list[float], fraction: float) -> float:
@@ -94,11 +102,40 @@ def measure(api, program_path: str) -> dict[str, float]:
     if wait_for(s, lambda s: abs(s.position[0] - start_pos) > 1e-6, 10):
         result["first_motion_ms"] = (time.perf_counter() - start) * 1e3
     wait_for(s, lambda s: s.interp_state == api.INTERP_IDLE and s.inpos, 30)
+    slowdowns = []
+    for _ in range(3):
+        slowdowns.append(
+            abort_slowdown_s(api, s, c, str(Path(program_path).with_name("dense.ngc")))
+        )
+    if None not in slowdowns:
+        result["abort_slowdown_ms"] = statistics.median(slowdowns) * 1e3
     c.mode(api.MODE_MDI)
     c.wait_complete(5)
     c.state(api.STATE_ESTOP)
     c.wait_complete(5)
     return {key: round(value, 3) for key, value in result.items()}
+
+
+def abort_slowdown_s(api, s, c, dense_path: str) -> float | None:
+    """Run the dense program, abort it at speed: seconds until the velocity drops."""
+    c.mode(api.MODE_AUTO)
+    c.wait_complete(5)
+    c.program_open(dense_path)
+    c.wait_complete(5)
+    c.auto(api.AUTO_RUN, 0)
+    if not wait_for(s, lambda s: s.position[0] < 1.0, 30):  # (its G0 X0 first)
+        return None
+    if not wait_for(s, lambda s: s.position[0] > 20.0, 30):
+        return None
+    s.poll()
+    speed = s.current_vel
+    start = time.perf_counter()
+    c.abort()
+    if not wait_for(s, lambda s: s.current_vel < speed - 1e-6, 5):
+        return None
+    slowdown = time.perf_counter() - start
+    wait_for(s, lambda s: s.interp_state == api.INTERP_IDLE and s.current_vel == 0, 10)
+    return slowdown
 
 
 def ours(ini: Path) -> dict[str, float]:
@@ -109,6 +146,7 @@ def ours(ini: Path) -> dict[str, float]:
     shutil.copytree(ini.parent, machine)
     program = folder / "bench.ngc"
     program.write_text(PROGRAM)
+    program.with_name("dense.ngc").write_text(DENSE_PROGRAM)
     env = dict(os.environ, CNC_INSTANCE=f"bench{os.getpid()}")
     os.environ.update(env)
     start = time.perf_counter()
@@ -145,6 +183,7 @@ def lcnc() -> dict[str, float] | None:
     shutil.rmtree(work, ignore_errors=True)
     shutil.copytree(REFERENCE, work)
     (work / "bench.ngc").write_text(PROGRAM)
+    (work / "dense.ngc").write_text(DENSE_PROGRAM)
     shutil.copy(__file__, work / "system_bench.py")
     subprocess.run(["chmod", "-R", "a+rX", str(work)], check=False)
     start = time.perf_counter()
