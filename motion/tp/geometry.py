@@ -34,10 +34,28 @@ EPS = 1e-9
 def path_length(delta: np.ndarray) -> float:
     """LinuxCNC's rule for a move's length: XYZ if they move, else UVW, else ABC."""
     x, y, z, a, b, c, u, v, w = delta.tolist()
-    for length in (math.hypot(x, y, z), math.hypot(u, v, w), math.hypot(a, b, c)):
-        if length > EPS:
-            return length
-    return 0.0
+    length = math.hypot(x, y, z)
+    if length > EPS:
+        return length
+    length = math.hypot(u, v, w)
+    if length > EPS:
+        return length
+    length = math.hypot(a, b, c)
+    return length if length > EPS else 0.0
+
+
+def norm(v: np.ndarray) -> float:
+    """Euclidean length: what np.linalg.norm computes for a vector, without its
+    Python-level overhead (several microseconds for a few values)."""
+    return math.sqrt(v.dot(v))
+
+
+def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Cross product of two 3-vectors: np.cross's arithmetic, on plain floats (np.cross
+    costs about ten microseconds)."""
+    a0, a1, a2 = a.tolist()
+    b0, b1, b2 = b.tolist()
+    return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
 
 
 class Piece:
@@ -105,7 +123,9 @@ class Piece:
             acc = move_acc
             for t_i, n_i, max_acc_i in zip(t, n, max_acc, strict=True):
                 if t_i > EPS:
-                    acc = min(acc, (max_acc_i - v2 * n_i) / t_i)
+                    axis_acc = (max_acc_i - v2 * n_i) / t_i
+                    if axis_acc < acc:  # (as min(), without a call per axis)
+                        acc = axis_acc
         else:
             worst = max(map(mul, t, inv_acc))
             acc = min(move_acc, 1.0 / worst) if worst > 0 else move_acc
@@ -141,7 +161,7 @@ class Piece:
 
 
 class LinePiece(Piece):
-    __slots__ = ("direction", "full_length", "start")
+    __slots__ = ("_end", "_is_single", "direction", "full_length", "start")
 
     def __init__(self, move: object, start: np.ndarray, end: np.ndarray) -> None:
         delta = end - start
@@ -150,18 +170,26 @@ class LinePiece(Piece):
         self.start = start.copy()
         self.direction = delta / length if length > 0 else np.zeros(NUM_AXES)
         self.full_length = length  # before blends trimmed it
+        self._end: np.ndarray | None = None  # ``end``, computed once until a trim
+        self._is_single: bool | None = None  # ``is_single_group``, computed once
 
     @property
     def end(self) -> np.ndarray:
-        return self.start + self.direction * self.length
+        """The end point (shared, not to be modified in place)."""
+        if self._end is None:
+            self._end = self.start + self.direction * self.length
+        return self._end
 
     def is_xyz_only(self) -> bool:
-        return np.abs(self.direction[3:]).max() <= EPS
+        return max(map(abs, self.direction[3:].tolist())) <= EPS
 
     def is_single_group(self) -> bool:
         """True when the path length is the full 9-D length (only one axis group moves),
         which is when a tangent blend arc in 9-D keeps the feed meaning intact."""
-        return abs(float(self.direction @ self.direction) - 1.0) < 1e-9
+        if self._is_single is None:  # (asked twice per blended line: as new piece, as tail)
+            # (ndarray.dot: the same sum as ``@``, at half the cost)
+            self._is_single = abs(float(self.direction.dot(self.direction)) - 1.0) < 1e-9
+        return self._is_single
 
     def point(self, s: float) -> np.ndarray:
         return self.start + self.direction * s
@@ -175,9 +203,11 @@ class LinePiece(Piece):
     def trim_start(self, d: float) -> None:
         self.start = self.start + self.direction * d
         self.length -= d
+        self._end = None
 
     def trim_end(self, d: float) -> None:
         self.length -= d
+        self._end = None
 
 
 class ArcPiece(Piece):
@@ -185,7 +215,7 @@ class ArcPiece(Piece):
     with phi = s * k. ``e1``/``e2`` are orthonormal 9-D vectors; ``h`` carries the helix
     (motion along the normal) and the linear motion of the other axes, per radian."""
 
-    __slots__ = ("centre", "dr", "e1", "e2", "full_length", "h", "k", "r0", "theta")
+    __slots__ = ("centre", "dr", "e1", "e2", "full_length", "h", "has_h", "k", "r0", "theta")
 
     def __init__(
         self,
@@ -209,6 +239,7 @@ class ArcPiece(Piece):
                 break
         super().__init__(move, per_radian * theta)
         self.centre, self.e1, self.e2, self.h = centre, e1, e2, h
+        self.has_h = any(h_list)  # a helix, or other axes moving along
         self.r0, self.dr, self.theta = r0, dr, theta
         self.k = theta / self.length if self.length > 0 else 0.0
         self.full_length = self.length  # before blends trimmed it
@@ -216,12 +247,12 @@ class ArcPiece(Piece):
     def point(self, s: float) -> np.ndarray:
         phi = s * self.k
         r = self.r0 + self.dr * phi
-        return (
-            self.centre
-            + (r * math.cos(phi)) * self.e1
-            + (r * math.sin(phi)) * self.e2
-            + (self.h * phi)
-        )
+        # (this runs every servo period: the sums go in place, and a zero h is not added)
+        p = self.centre + (r * math.cos(phi)) * self.e1
+        p += (r * math.sin(phi)) * self.e2
+        if self.has_h:
+            p += self.h * phi
+        return p
 
     def tangent(self, s: float) -> np.ndarray:
         phi = s * self.k
@@ -233,11 +264,11 @@ class ArcPiece(Piece):
     def plane_normal(self) -> np.ndarray | None:
         """The XYZ normal of a flat circle in XYZ only (no spiral, helix or other axes),
         the arcs a corner blend may cut into; None for any other arc."""
-        if abs(self.dr) > EPS or np.abs(self.h).max() > EPS:
+        if abs(self.dr) > EPS or max(map(abs, self.h.tolist())) > EPS:
             return None
-        if np.abs(self.e1[3:]).max() > EPS or np.abs(self.e2[3:]).max() > EPS:
+        if max(map(abs, self.e1[3:].tolist() + self.e2[3:].tolist())) > EPS:
             return None
-        return np.cross(self.e1[XYZ], self.e2[XYZ])
+        return cross3(self.e1[XYZ], self.e2[XYZ])
 
     def trim_start(self, d: float) -> None:
         """Start ``d`` further along (the end stays where it is)."""
@@ -258,8 +289,8 @@ class ArcPiece(Piece):
         k, dr = self.k, abs(self.dr)
         plane = list(map(math.hypot, self.e1.tolist(), self.e2.tolist()))
         t_plane, n_plane = (dr + rmax) * k, (2 * dr + rmax) * k * k
-        h = self.h.tolist()
-        if any(h):  # a helix, or other axes moving along
+        if self.has_h:
+            h = self.h.tolist()
             t = [t_plane * p + abs(h_i) * k for p, h_i in zip(plane, h, strict=True)]
         else:
             t = [t_plane * p for p in plane]
@@ -276,23 +307,23 @@ def circle_piece(
 ) -> ArcPiece:
     """The arc of an EMC_TRAJ_CIRCULAR_MOVE: centre and normal in XYZ, counter-clockwise
     about the normal, ``turns`` extra full turns; the other axes move linearly."""
-    nrm = float(np.linalg.norm(normal))
+    nrm = norm(normal)
     if not nrm > EPS:
         raise ValueError("circle normal vector is zero")
     nhat = normal / nrm
     rel0 = start[XYZ] - centre
     rel1 = end[XYZ] - centre
-    axial0 = float(rel0 @ nhat)
-    axial1 = float(rel1 @ nhat)
+    axial0 = float(rel0.dot(nhat))  # (ndarray.dot: the same sum as ``@``, cheaper)
+    axial1 = float(rel1.dot(nhat))
     p0 = rel0 - axial0 * nhat
     p1 = rel1 - axial1 * nhat
-    r0 = float(np.linalg.norm(p0))
-    r1 = float(np.linalg.norm(p1))
+    r0 = norm(p0)
+    r1 = norm(p1)
     if r0 < 1e-7 or r1 < 1e-7:
         raise ValueError("circle start or end lies on the centre (zero radius)")
     e1x = p0 / r0
-    e2x = np.cross(nhat, e1x)
-    angle = math.atan2(float(p1 @ e2x), float(p1 @ e1x))
+    e2x = cross3(nhat, e1x)
+    angle = math.atan2(float(p1.dot(e2x)), float(p1.dot(e1x)))
     if angle <= 1e-12:
         angle += 2 * math.pi  # same start and end: one full turn, like LinuxCNC
     theta = angle + 2 * math.pi * int(turns)
@@ -317,8 +348,11 @@ def blend_arc(
     """The tangent arc of ``radius`` between a line arriving along ``u1`` and one leaving
     along ``u2`` at ``corner``, turning by ``turn`` radians."""
     d = radius * math.tan(0.5 * turn)
-    inward = u2 - math.cos(turn) * u1
-    inward /= math.hypot(*inward.tolist())
-    start = corner - u1 * d
-    centre = start + inward * radius
-    return ArcPiece(move, centre, -inward, u1.copy(), radius, radius, turn, np.zeros(NUM_AXES))
+    # e1 points from the centre to the arc's start (away from the corner's inside), so
+    # the centre lies ``radius`` back along it from the start. (Few numpy calls, two of
+    # them in place: this runs for every blended corner.)
+    e1 = math.cos(turn) * u1 - u2
+    e1 /= math.hypot(*e1.tolist())
+    centre = corner - u1 * d
+    centre -= e1 * radius
+    return ArcPiece(move, centre, e1, u1.copy(), radius, radius, turn, np.zeros(NUM_AXES))

@@ -44,7 +44,17 @@ import numpy as np
 
 from motion.free import braking_speed, check_finite, check_positive
 from motion.pose import NUM_AXES, EmcPose
-from motion.tp.geometry import EPS, XYZ, ArcPiece, LinePiece, Piece, blend_arc, circle_piece
+from motion.tp.geometry import (
+    EPS,
+    XYZ,
+    ArcPiece,
+    LinePiece,
+    Piece,
+    blend_arc,
+    circle_piece,
+    cross3,
+    norm,
+)
 from motion.tp.spindlesync import RigidTap, follow_speed
 
 # Part of the acceleration budget a curved piece may use for centripetal acceleration.
@@ -101,6 +111,9 @@ class SyncMode(enum.IntEnum):
 
 
 _POSITION = int(SyncMode.POSITION)
+# The end conditions as module names: looking a member up on its enum class costs about
+# a tenth of a microsecond, several times per queued move.
+_STOP, _EXACT, _BLEND = TermCond.STOP, TermCond.EXACT, TermCond.BLEND
 
 
 class ProbeType(enum.IntEnum):
@@ -198,9 +211,10 @@ class TrajectoryPlanner:
         # plan slightly inside the acceleration limits: a period that straddles two pieces
         # mixes their accelerations (see step)
         self._plan_acc = acc * ACC_MARGIN
+        self._plan_acc_values = self._plan_acc.tolist()  # the same as plain floats
         # what Piece.apply_limits takes for every piece, as plain floats (0: unlimited axis)
         self._piece_axis_limits = (
-            self._plan_acc.tolist(),
+            self._plan_acc_values,
             (1.0 / vel).tolist(),
             (1.0 / self._plan_acc).tolist(),
         )
@@ -419,7 +433,7 @@ class TrajectoryPlanner:
         normal_v = np.array(normal, dtype=float)
         if centre_v.shape != (3,) or normal_v.shape != (3,):
             raise ValueError("circle centre and normal need 3 values (X Y Z)")
-        if not (np.isfinite(centre_v).all() and np.isfinite(normal_v).all()):
+        if not all(map(math.isfinite, centre_v.tolist() + normal_v.tolist())):
             raise ValueError("circle centre and normal must be finite")
         if int(turns) != turns or turns < 0:
             raise ValueError(f"circle turns must be a whole number >= 0, got {turns}")
@@ -431,10 +445,12 @@ class TrajectoryPlanner:
     def _check_target(self, end: Sequence[float]) -> np.ndarray:
         if self.is_full:
             raise OverflowError("trajectory queue is full")
-        end_v = np.array(list(end), dtype=float)
+        end_v = np.array(end if isinstance(end, list) else list(end), dtype=float)
         if end_v.shape != (NUM_AXES,):
             raise ValueError(f"target needs {NUM_AXES} values (X Y Z A B C U V W)")
-        if not np.isfinite(end_v).all():
+        # (math on the nine floats: numpy's all() is a Python-level call, several times
+        # slower for nine values)
+        if not all(map(math.isfinite, end_v.tolist())):
             raise ValueError(f"target is not finite: {end_v.tolist()}")
         return end_v
 
@@ -445,17 +461,17 @@ class TrajectoryPlanner:
         tolerance = check_finite("blend tolerance", tolerance)
         if tolerance < 0:
             raise ValueError(f"blend tolerance must be >= 0, got {tolerance}")
-        move = Move(
-            int(motion_id), float(vel), bool(is_rapid), TermCond(term), tolerance, probe=probe
-        )
+        if type(term) is not TermCond:  # (the enum call costs half a microsecond)
+            term = TermCond(term)
+        move = Move(int(motion_id), float(vel), bool(is_rapid), term, tolerance, probe=probe)
         if is_rapid:
             return move
         move.sync, move.feed_per_rev = self._sync
-        if move.sync != SyncMode.NONE:
+        if move.sync:  # (not SyncMode.NONE)
             move.vel = float(ini_maxvel)  # the spindle sets the speed, within the limits
         move.is_waiting_for_at_speed = self._is_at_speed_wait_pending
         self._is_at_speed_wait_pending = False
-        if move.sync == SyncMode.POSITION:
+        if move.sync == _POSITION:
             prev = self._moves[-1] if self._moves else None
             is_chained = prev is not None and prev.sync == SyncMode.POSITION
             is_chained = is_chained and prev.rigid_tap is None
@@ -503,11 +519,12 @@ class TrajectoryPlanner:
         when both are lines, else a speed limit at the corner. Returns the index of the
         first piece whose planning data changed."""
         index = len(self._pieces) - 1
-        if prev_move.term == TermCond.STOP or prev_move.probe is not None:
+        prev_term = prev_move.term
+        if prev_term is _STOP or prev_move.probe is not None:
             return index  # exact stop: exit stays 0
         if move.is_waiting_for_at_speed or move.is_waiting_for_index:
             return index  # the move starts at rest (it may have to wait)
-        is_threading = SyncMode.POSITION in (prev_move.sync, move.sync)
+        is_threading = prev_move.sync == _POSITION or move.sync == _POSITION
         if is_threading and prev_move.sync != move.sync:
             return index  # a G33 chain ends at rest: no blend into unsynchronised motion
         arc = None
@@ -515,7 +532,7 @@ class TrajectoryPlanner:
         is_own = (tail is prev_move.line or tail is prev_move.arc) and (
             piece is move.line or piece is move.arc
         )
-        if prev_move.term == TermCond.BLEND and is_own:
+        if prev_term is _BLEND and is_own:
             if (
                 isinstance(tail, LinePiece)
                 and isinstance(piece, LinePiece)
@@ -532,7 +549,7 @@ class TrajectoryPlanner:
                 index = min(index, self._link(arc))
                 prev_move.end_s = arc.s0 + arc.length
                 return index
-        if prev_move.term == TermCond.EXACT and not self._is_tangent(tail, piece):
+        if prev_term is _EXACT and not self._is_tangent(tail, piece):
             return index  # G61 stops at every corner, however slight
         tail.exit_max = self._kink_speed(tail, piece)
         if tail.is_kink_end:  # the period crossing the joint keeps 1 - KINK_FRACTION
@@ -542,7 +559,8 @@ class TrajectoryPlanner:
 
     def _blend(self, move: Move, line1: LinePiece, line2: LinePiece) -> ArcPiece | None:
         """Replace the corner between two lines by a tangent arc, or None if not possible."""
-        cos_turn = float(line1.direction @ line2.direction)
+        # (ndarray.dot: the same BLAS sum as ``@``, so the same bits, at half the cost)
+        cos_turn = float(line1.direction.dot(line2.direction))
         turn = math.acos(max(-1.0, min(1.0, cos_turn)))
         if turn < COLLINEAR_ANGLE or turn > MAX_BLEND_TURN:
             return None  # collinear: nothing to blend; reversal: stop at the corner
@@ -569,10 +587,16 @@ class TrajectoryPlanner:
         # longer to run at w_full than the two cuts at their own speeds (a sharp corner
         # or different feeds); then the arc stays at that radius, closest to the corner.
         if turn / w_full > tan_half * (1.0 / v1 + 1.0 / v2):
-            inward = (line2.direction - cos_turn * line1.direction) / math.sin(turn)
-            plane = np.sqrt(line1.direction**2 + inward**2)
-            curved = plane > EPS
-            plane_acc = float(np.min(self._plan_acc[curved] / plane[curved]))
+            # the lowest acceleration along the arc's plane: per axis, its limit over the
+            # axis's share of the plane (the unit vectors u1 and inward span it)
+            sin_turn = math.sin(turn)
+            plane_acc = math.inf
+            u1, u2 = line1.direction.tolist(), line2.direction.tolist()
+            for a1, a2, axis_acc in zip(u1, u2, self._plan_acc_values, strict=True):
+                inward = (a2 - cos_turn * a1) / sin_turn
+                plane = math.sqrt(a1 * a1 + inward * inward)
+                if plane > EPS:
+                    plane_acc = min(plane_acc, axis_acc / plane)
             radius = min(radius, w_full * w_full / (NORMAL_FRACTION * plane_acc))
         d = radius * tan_half
         if d <= 1e-9:
@@ -590,7 +614,7 @@ class TrajectoryPlanner:
         first guess is the line-line blend of the corner's tangents; it shrinks until the
         arc keeps to the tolerance."""
         t1, t2 = _unit(p1.tangent(p1.length)), _unit(p2.tangent(0.0))
-        turn = math.acos(max(-1.0, min(1.0, float(t1 @ t2))))
+        turn = math.acos(max(-1.0, min(1.0, float(t1.dot(t2)))))
         if not COLLINEAR_ANGLE < turn < MAX_BLEND_TURN or not _is_flat_corner(p1, p2, t1, t2):
             return None
         avail1 = min(0.5 * p1.full_length, p1.length)
@@ -615,7 +639,7 @@ class TrajectoryPlanner:
                 d1 *= 0.5
                 continue
             arc, d2 = found
-            deviation = abs(float(np.linalg.norm(corner - arc.centre[XYZ])) - arc.r0)
+            deviation = abs(norm(corner - arc.centre[XYZ]) - arc.r0)
             if deviation <= tolerance:
                 break
             d1 *= 0.98 * tolerance / deviation  # the deviation grows about as the trim
@@ -656,7 +680,10 @@ class TrajectoryPlanner:
         jump = _tangent_jump(tail, piece)
         speed = min(tail.vplan, piece.vplan)
         turning_acc = speed / self.cycle_time + piece.acc
-        return bool(np.all(jump * turning_acc <= TANGENT_KINK_RATIO * self._plan_acc))
+        return all(
+            j * turning_acc <= TANGENT_KINK_RATIO * axis_acc
+            for j, axis_acc in zip(jump, self._plan_acc_values, strict=True)
+        )
 
     def _kink_speed(self, tail: Piece, piece: Piece) -> float:
         """Speed at an unblended junction. A corner (direction change above
@@ -665,13 +692,13 @@ class TrajectoryPlanner:
         can change in one period; the period that crosses it keeps the rest (see step)."""
         jump = _tangent_jump(tail, piece)
         v = min(tail.vplan, piece.vplan)
-        if float(jump.max()) > KINK_MAX_JUMP:
+        if max(jump) > KINK_MAX_JUMP:
             return 0.0
-        moving = jump > 1e-12
-        if moving.any():
-            budget = KINK_FRACTION * self._plan_acc[moving] * self.cycle_time
-            v = min(v, float(np.min(budget / jump[moving])))
-            tail.is_kink_end = True
+        dt = self.cycle_time
+        for j, axis_acc in zip(jump, self._plan_acc_values, strict=True):
+            if j > 1e-12:  # this axis's velocity jumps: its budget over the jump
+                v = min(v, KINK_FRACTION * axis_acc * dt / j)
+                tail.is_kink_end = True
         return v
 
     def _link(self, piece: Piece) -> int:
@@ -840,9 +867,10 @@ class TrajectoryPlanner:
         pieces = self._pieces
         p = pieces[self._head]
         move = p.move
-        self._check_probe(move)
-        if not self._moves:  # the probe check aborted a move that had not started
-            return self.pos
+        if move.probe is not None:
+            self._check_probe(move)
+            if not self._moves:  # the probe check aborted a move that had not started
+                return self.pos
         revs = self.spindle_revs
         revs_delta = revs - self._last_revs
         self._last_revs = revs
@@ -882,13 +910,17 @@ class TrajectoryPlanner:
         v_top = v_new
         j = self._head
         n_pieces = len(pieces)
-        while j < n_pieces:
+        while j < n_pieces:  # (comparisons rather than min(): this loop runs every period)
             q = pieces[j]
             q_end = q.s0 + q.length
-            a_low = min(a_low, q.acc)
-            v_new = min(v_new, q.vcap)
+            if q.acc < a_low:
+                a_low = q.acc
+            if q.vcap < v_new:
+                v_new = q.vcap
             if q.v_exit < v_top:
-                v_new = min(v_new, _piece_braking(q, q_end - s_here, v, dt))
+                v_braking = _piece_braking(q, q_end - s_here, v, dt)
+                if v_braking < v_new:
+                    v_new = v_braking
             if q.is_kink_end and q_end < reach:
                 is_kink_step = True
             if q_end >= reach or q.v_exit <= 0.0:
@@ -1076,17 +1108,24 @@ def _piece_braking(q: Piece, dist: float, v: float, dt: float) -> float:
     The zone we are in is checked against its end speed at its own acceleration, and so
     is the next zone, where this period may end; a zone's curve drawn back into a zone
     of lower acceleration would be stricter than the plan, so no farther zone is used."""
-    head, acc_head, body, tail, acc_tail = q.zones()
+    # the zones, as Piece.zones gives them (inlined: this runs several times a period)
+    length, window, acc = q.length, q.window, q.acc
+    if length < 2.0 * window:  # all tail, at the lowest of the three accelerations
+        return braking_speed(dist, v, min(q.acc_head, acc, q.acc_tail), dt, q.v_exit)
+    head = tail = window
+    body = length - 2.0 * window
+    acc_tail = min(acc, q.acc_tail)
     if dist <= tail:
         return braking_speed(dist, v, acc_tail, dt, q.v_exit)
-    in_tail_next = braking_speed(dist, v, acc_tail, dt, q.v_exit)
-    if body > 0.0 and dist <= tail + body:
-        return min(braking_speed(dist - tail, v, q.acc, dt, q.v_mid), in_tail_next)
-    if body > 0.0:  # in the head zone (or before the piece): head and body ends
+    acc_head = min(q.acc_head, acc)
+    if body > 0.0 and dist > tail + body:  # in the head zone (or before the piece)
         return min(
             braking_speed(dist - tail - body, v, acc_head, dt, q.v_body),
-            braking_speed(dist - tail, v, q.acc, dt, q.v_mid),
+            braking_speed(dist - tail, v, acc, dt, q.v_mid),
         )
+    in_tail_next = braking_speed(dist, v, acc_tail, dt, q.v_exit)
+    if body > 0.0:  # in the body: its end and the tail's
+        return min(braking_speed(dist - tail, v, acc, dt, q.v_mid), in_tail_next)
     if head > 0.0:  # no body: head then tail
         return min(braking_speed(dist - tail, v, acc_head, dt, q.v_body), in_tail_next)
     return in_tail_next
@@ -1110,31 +1149,31 @@ def _is_blend_faster(v1: float, v2: float, arc: ArcPiece, cut: float, acc: float
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
-    return v / float(np.linalg.norm(v))
+    return v / norm(v)
 
 
-def _tangent_jump(tail: Piece, piece: Piece) -> np.ndarray:
+def _tangent_jump(tail: Piece, piece: Piece) -> list[float]:
     """Per-axis change of the unit tangent where ``piece`` follows ``tail``."""
-    return np.abs(piece.tangent(0.0) - tail.tangent(tail.length))
+    t_out, t_in = piece.tangent(0.0).tolist(), tail.tangent(tail.length).tolist()
+    return [abs(b - a) for a, b in zip(t_in, t_out, strict=True)]
 
 
 def _is_corner(tail: Piece, piece: Piece) -> bool:
     """A direction change too large to pass at speed (see _kink_speed)."""
-    jump = _tangent_jump(tail, piece)
-    return float(jump.max()) > KINK_MAX_JUMP
+    return max(_tangent_jump(tail, piece)) > KINK_MAX_JUMP
 
 
 def _is_flat_corner(p1: Piece, p2: Piece, t1: np.ndarray, t2: np.ndarray) -> bool:
     """Whether both pieces lie in the XYZ plane of the corner's tangents ``t1``, ``t2``:
     lines moving XYZ only, flat circles about that plane's normal."""
-    normal = _unit(np.cross(t1[XYZ], t2[XYZ]))
+    normal = _unit(cross3(t1[XYZ], t2[XYZ]))
     for p in (p1, p2):
         if isinstance(p, LinePiece):
             if not p.is_xyz_only():
                 return False
         elif isinstance(p, ArcPiece):
             arc_normal = p.plane_normal()
-            if arc_normal is None or float(np.linalg.norm(np.cross(arc_normal, normal))) > 1e-9:
+            if arc_normal is None or norm(cross3(arc_normal, normal)) > 1e-9:
                 return False
         else:
             return False
@@ -1154,11 +1193,11 @@ def _tangent_arc(
         """How far the tangents' meeting point is from each end, and p2's direction."""
         t2 = _unit(p2.tangent(d2))
         w = p2.point(d2) - start
-        c = float(t1 @ t2)
+        c = float(t1.dot(t2))  # (ndarray.dot: as ``@``, at half the cost)
         det = 1.0 - c * c
         if det < 1e-12:  # parallel tangents never meet: treat as trimmed too far
             return 0.0, math.inf, t2
-        w1, w2 = float(t1 @ w), float(t2 @ w)
+        w1, w2 = float(t1.dot(w)), float(t2.dot(w))
         return (w1 - c * w2) / det, (w2 - c * w1) / det, t2
 
     lo, hi = 0.0, d2_max
@@ -1181,7 +1220,7 @@ def _tangent_arc(
     a, b, t2 = legs(d2)
     if not (a > 1e-9 and b > 1e-9 and abs(a - b) <= 1e-9 * (1.0 + a)):
         return None  # (a - b jumped over 0: the tangents' meeting point went to infinity)
-    turn = math.acos(max(-1.0, min(1.0, float(t1 @ t2))))
+    turn = math.acos(max(-1.0, min(1.0, float(t1.dot(t2)))))
     if not COLLINEAR_ANGLE < turn < MAX_BLEND_TURN:
         return None
     radius = 0.5 * (a + b) / math.tan(0.5 * turn)
