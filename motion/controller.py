@@ -243,11 +243,14 @@ class MotionController:
             if type(cmd) not in _ENDS_A_REFUSED_PROGRAM:
                 return ""
             self.is_after_refused_move = False
+        is_move = isinstance(cmd, emc.MOVES_WITH_MOTION_ID)
+        if is_move and cmd.id:  # task stamps the line into the move (emcmotCommand.id)
+            self.next_motion_id = cmd.id  # (0: the last EMC_TRAJ_SET_MOTION_ID's stays)
         try:
             problem = handler(self, cmd)
         except (ValueError, KinematicsError) as exc:
             problem = f"{cmd.NAME}: {exc}"
-        if problem and isinstance(cmd, emc.MOVES_WITH_MOTION_ID):
+        if problem and is_move:
             self.is_after_refused_move = True
         return problem
 
@@ -498,7 +501,6 @@ class MotionController:
         return "\n".join(problems) or None
 
     def _linear_move(self, cmd: emc.EMC_TRAJ_LINEAR_MOVE) -> str | None:
-        self._take_motion_id(cmd)
         end = _pose(cmd.end)
         problem = self._require_coord() or self._check_soft_limits(end, "Linear move")
         if problem:
@@ -518,7 +520,6 @@ class MotionController:
         return None
 
     def _circular_move(self, cmd: emc.EMC_TRAJ_CIRCULAR_MOVE) -> str | None:
-        self._take_motion_id(cmd)
         end = _pose(cmd.end)
         problem = self._require_coord() or self._check_soft_limits(end, "Circular move")
         if problem:
@@ -554,7 +555,6 @@ class MotionController:
         self._is_last_move_rapid = is_rapid
 
     def _probe(self, cmd: emc.EMC_TRAJ_PROBE) -> str | None:
-        self._take_motion_id(cmd)
         end = _pose(cmd.pos)
         problem = self._require_coord() or self._check_soft_limits(end, "Probe move")
         if problem:
@@ -651,12 +651,6 @@ class MotionController:
     def _set_motion_id(self, cmd: emc.EMC_TRAJ_SET_MOTION_ID) -> None:
         self.next_motion_id = cmd.id
         return None
-
-    def _take_motion_id(self, move: emc.NMLmsg) -> None:
-        """A move's own motion id (task stamps it into the move, as LinuxCNC's task fills
-        emcmotCommand.id), else the last EMC_TRAJ_SET_MOTION_ID's stays."""
-        if move.id:
-            self.next_motion_id = move.id
 
     def _pause(self, _cmd: emc.NMLmsg) -> None:
         self.tp.pause()
@@ -861,7 +855,6 @@ class MotionController:
 
     def _rigid_tap(self, cmd: emc.EMC_TRAJ_RIGID_TAP) -> str | None:
         """G33.1: in following the spindle, spindle reversed, out again (MOT-062)."""
-        self._take_motion_id(cmd)
         end = _pose(cmd.pos)
         problem = self._require_coord() or self._check_soft_limits(end, "Rigid tap move")
         if problem:

@@ -319,14 +319,16 @@ class Motmod:
         motion.program_line = tp.motion_id
         motion.current_vel = controller.current_vel
         motion.distance_to_go = tp.distance_to_go if controller.mode == COORD else 0.0
-        state = (is_enabled, controller.is_in_position, controller.mode, controller.is_jogging)
+        is_in_position = controller.is_in_position
+        mode, is_jogging = controller.mode, controller.is_jogging
+        state = (is_enabled, is_in_position, mode, is_jogging)
         if is_all or state != self._motion_written:
             self._motion_written = state
             motion.motion_enabled = is_enabled
-            motion.in_position = state[1]
-            motion.coord_mode = controller.mode == COORD
-            motion.teleop_mode = controller.mode == TELEOP
-            motion.jog_is_active = state[3]
+            motion.in_position = is_in_position
+            motion.coord_mode = mode == COORD
+            motion.teleop_mode = mode == TELEOP
+            motion.jog_is_active = is_jogging
         if is_all or controller.digital_out != self._digital_out_written:
             self._digital_out_written = list(controller.digital_out)
             for index, value in enumerate(controller.digital_out):

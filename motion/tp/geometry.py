@@ -91,6 +91,9 @@ class Piece:
         # of their accelerations. ``window`` is what one period can travel; the first and
         # last ``window`` of the piece are planned with the lowest acceleration of the
         # pieces a period may touch there (``acc_head``/``acc_tail``, set by the planner).
+        # These zones, head, body (at ``acc``) and tail, are what the planner's backward
+        # pass and braking curves use; a piece shorter than two windows is all tail, at
+        # the lowest of the three accelerations.
         self.window = 0.0
         self.acc_head = self.acc_tail = 0.0
         self.v_mid = 0.0  # planned speed where the tail zone begins
@@ -132,23 +135,6 @@ class Piece:
         self.vcap = max(vcap, 0.0)
         self.acc = self.acc_head = self.acc_tail = max(acc, EPS)
 
-    def zones(self) -> tuple[float, float, float, float, float]:
-        """Planning zones: (head length, head acceleration, body length, tail length,
-        tail acceleration); the body uses ``acc``. A piece shorter than two windows is
-        all tail, at the lowest of the three accelerations."""
-        length, window = self.length, self.window
-        if length < 2.0 * window:
-            lowest = min(self.acc_head, self.acc, self.acc_tail)
-            return 0.0, lowest, 0.0, length, lowest
-        return (
-            window,
-            min(self.acc_head, self.acc),
-            length - 2.0 * window,
-            window,
-            min(self.acc, self.acc_tail),
-        )
-
-    # implemented by subclasses
     def point(self, s: float) -> np.ndarray:
         raise NotImplementedError
 

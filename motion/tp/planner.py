@@ -13,7 +13,7 @@ ends at rest); it stops as soon as a speed does not change, so its cost is the b
 distance, not the queue, and it is spread over a few servo periods while the machine is
 far from the pieces it changes (``_backward_pass``). A period that crosses from one piece
 into the next can only use the lower of their accelerations, so the first and last
-stretch of each piece is planned with that (``Piece.zones``): plan and servo period agree
+stretch of each piece is planned with that (``Piece.window``): plan and servo period agree
 exactly.
 
 Servo period (``step``): the path speed follows the cap with bounded acceleration and
@@ -210,14 +210,10 @@ class TrajectoryPlanner:
         self.axis_max_vel, self.axis_max_acc = vel, acc
         # plan slightly inside the acceleration limits: a period that straddles two pieces
         # mixes their accelerations (see step)
-        self._plan_acc = acc * ACC_MARGIN
-        self._plan_acc_values = self._plan_acc.tolist()  # the same as plain floats
+        plan_acc = acc * ACC_MARGIN
+        self._plan_acc = plan_acc.tolist()  # (plain floats: read per axis, per move)
         # what Piece.apply_limits takes for every piece, as plain floats (0: unlimited axis)
-        self._piece_axis_limits = (
-            self._plan_acc_values,
-            (1.0 / vel).tolist(),
-            (1.0 / self._plan_acc).tolist(),
-        )
+        self._piece_axis_limits = (self._plan_acc, (1.0 / vel).tolist(), (1.0 / plan_acc).tolist())
         self.max_vel, self.max_acc = float(max_vel), float(max_acc)
 
     def _reset_queue(self, pos: np.ndarray) -> None:
@@ -592,7 +588,7 @@ class TrajectoryPlanner:
             sin_turn = math.sin(turn)
             plane_acc = math.inf
             u1, u2 = line1.direction.tolist(), line2.direction.tolist()
-            for a1, a2, axis_acc in zip(u1, u2, self._plan_acc_values, strict=True):
+            for a1, a2, axis_acc in zip(u1, u2, self._plan_acc, strict=True):
                 inward = (a2 - cos_turn * a1) / sin_turn
                 plane = math.sqrt(a1 * a1 + inward * inward)
                 if plane > EPS:
@@ -682,7 +678,7 @@ class TrajectoryPlanner:
         turning_acc = speed / self.cycle_time + piece.acc
         return all(
             j * turning_acc <= TANGENT_KINK_RATIO * axis_acc
-            for j, axis_acc in zip(jump, self._plan_acc_values, strict=True)
+            for j, axis_acc in zip(jump, self._plan_acc, strict=True)
         )
 
     def _kink_speed(self, tail: Piece, piece: Piece) -> float:
@@ -695,7 +691,7 @@ class TrajectoryPlanner:
         if max(jump) > KINK_MAX_JUMP:
             return 0.0
         dt = self.cycle_time
-        for j, axis_acc in zip(jump, self._plan_acc_values, strict=True):
+        for j, axis_acc in zip(jump, self._plan_acc, strict=True):
             if j > 1e-12:  # this axis's velocity jumps: its budget over the jump
                 v = min(v, KINK_FRACTION * axis_acc * dt / j)
                 tail.is_kink_end = True
@@ -704,7 +700,7 @@ class TrajectoryPlanner:
     def _link(self, piece: Piece) -> int:
         """Append ``piece``; returns the index of the first piece whose plan changed.
         Lowers ``acc_tail`` of the pieces from which one period can reach the new piece,
-        and the new piece's ``acc_head`` likewise (see ``Piece.zones``)."""
+        and the new piece's ``acc_head`` likewise (see ``Piece.window``)."""
         dt = self.cycle_time
         piece.window = (piece.vcap + piece.acc * dt) * dt
         pieces = self._pieces
@@ -797,7 +793,7 @@ class TrajectoryPlanner:
                 self._pass_next = None  # the rest of the plan stands
                 return
             p.v_exit = v_exit
-            # Piece.zones, inlined: this loop is the planner's hottest
+            # the piece's zones (see Piece.window), inline: this loop is the planner's hottest
             length, window, acc = p.length, p.window, p.acc
             if length < 2.0 * window:
                 low = min(p.acc_head, acc, p.acc_tail)
@@ -1103,12 +1099,12 @@ class TrajectoryPlanner:
 
 def _piece_braking(q: Piece, dist: float, v: float, dt: float) -> float:
     """Highest next speed that keeps to the curve the lookahead planned for ``q`` (zone
-    by zone, ``Piece.zones``), with ``dist`` from here to the end of ``q``.
+    by zone, see ``Piece.window``), with ``dist`` from here to the end of ``q``.
 
     The zone we are in is checked against its end speed at its own acceleration, and so
     is the next zone, where this period may end; a zone's curve drawn back into a zone
     of lower acceleration would be stricter than the plan, so no farther zone is used."""
-    # the zones, as Piece.zones gives them (inlined: this runs several times a period)
+    # (the zones computed here: this runs several times a period)
     length, window, acc = q.length, q.window, q.acc
     if length < 2.0 * window:  # all tail, at the lowest of the three accelerations
         return braking_speed(dist, v, min(q.acc_head, acc, q.acc_tail), dt, q.v_exit)
