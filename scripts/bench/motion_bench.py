@@ -3,7 +3,7 @@
 period, and the shared benchmark programs run end to end, next to LinuxCNC 2.9's sim.
 
     .venv/bin/python scripts/bench/motion_bench.py [--programs NAME|FILE ...] [--dense P]
-                                                   [--no-lcnc] [--quick] [--keep]
+                                                   [--no-lcnc] [--no-c] [--quick] [--keep]
 
 Our machine is ``scripts/bench/axis_mm.ini`` (exactly the limits of LinuxCNC's sim
 ``axis_mm.ini``: per axis 30.48 mm/s and 508 mm/s², [TRAJ] 53.34 mm/s, 1 ms servo period),
@@ -23,6 +23,10 @@ Prints one JSON object:
 - ``planner_us_per_period``: CPU time of motion-command-handler + motion-controller per
   period during the dense program (queueing moves, planning, joints, status), p50/p99/p999/max;
   ``planner_wall_us_per_period`` the same in wall time.
+- ``machine_floor`` (with a C compiler): the same lateness figures of an empty 1 ms loop in
+  C (hal_bench's hal_latency.c, same CPU, priority and settings as the host) for as long as
+  the dense program ran, idle and ``loaded``: the overruns this machine itself causes (vCPU
+  stalls, kernel), to read ours against.
 - ``host_memory_growth_mib``: growth of the realtime host's resident memory while the dense
   program ran (memory locked: what it grows by is faulted in inside servo periods).
 - ``programs``: per program ``ours_s`` (RUN to idle) and ``lcnc_s``, ``time_ratio``
@@ -66,7 +70,7 @@ REPO = HERE.parents[1]
 sys.path.insert(0, str(REPO))
 sys.path.insert(0, str(HERE))
 
-from hal_bench import start_load, stop_load, summary  # noqa: E402
+from hal_bench import build_c_check, measure_c, start_load, stop_load, summary  # noqa: E402
 from program_runner import (  # noqa: E402
     SAMPLED_PINS,
     START_MDI,
@@ -227,6 +231,19 @@ def run_ours(
         finally:
             stop_load(load)
     return results, dense_runs
+
+
+def machine_floor(seconds: float, folder: Path) -> dict[str, Any] | None:
+    """The C loop alone, idle then loaded, for ``seconds`` each (None without a compiler)."""
+    from hal.rtapi_app import host_options_from_env
+
+    binary = build_c_check(str(folder))
+    if binary is None:
+        return None
+    options = host_options_from_env()
+    idle = measure_c(binary, seconds, is_loaded=False, host_options=options)
+    loaded = measure_c(binary, seconds, is_loaded=True, host_options=options)
+    return None if idle is None else {**idle, "loaded": loaded}
 
 
 # ------------------------------------------------------------------ LinuxCNC's sim
@@ -492,6 +509,7 @@ def main() -> int:
     parser.add_argument("--programs", nargs="+", help="names in the shared set, or .ngc files")
     parser.add_argument("--dense", help=f"program for lateness and CPU (default {DENSE})")
     parser.add_argument("--no-lcnc", action="store_true", help="skip LinuxCNC's sim")
+    parser.add_argument("--no-c", action="store_true", help="skip the C loop (machine_floor)")
     parser.add_argument("--quick", action="store_true", help=f"{QUICK} only, a smoke run")
     parser.add_argument("--timeout", type=float, default=300, help="per program, seconds")
     parser.add_argument(
@@ -522,6 +540,9 @@ def main() -> int:
             "lateness": lateness,
             "planner_us_per_period": cpu,
             "planner_wall_us_per_period": wall,
+            "machine_floor": None
+            if args.no_c
+            else machine_floor(dense_runs["idle"]["cycle_s"], folder),
             "host_memory_growth_mib": dense_runs["idle"]["host_memory_growth_mib"],
             "programs": {},
         }

@@ -36,6 +36,10 @@ def test_quick_run_reports_every_figure(procs, tmp_path, cnc_instance):
     assert lateness["periods"] > 0
     assert report["planner_us_per_period"]["p50"] > 0
     assert isinstance(report["host_memory_growth_mib"], float)
+    floor = report["machine_floor"]  # the empty C loop, when a C compiler is there
+    if floor is not None:
+        assert set(floor) >= LATENESS_KEYS and set(floor["loaded"]) >= LATENESS_KEYS
+        assert floor["periods"] > 0
     square = report["programs"]["square"]
     assert square["ours_is_ok"] and "ours_messages" not in square, square
     assert square["lcnc_s"] is None
