@@ -250,4 +250,3 @@ def interrupt_until(proc, master: int, wanted: bytes) -> None:
         if wanted in seen:
             return
     raise AssertionError(f"never saw {wanted!r}; saw {seen!r}")
-
