@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from motion.free import FreePlanner, JogLimitError
+from motion.free import FreePlanner, JogLimitError, check_finite
 from motion.homing import Homing, HomingConfig, HomingError
 from motion.joint import Joint
 from motion.kinematics import Kinematics, KinematicsError
@@ -272,8 +272,9 @@ class MotionController:
         self._stop_everything_now()
         return None
 
-    def _fault(self, message: str) -> None:
-        """A fault found during a period: report it and turn motion off."""
+    def fault(self, message: str) -> None:
+        """A fault (found during a period, or motmod's report of an internal error): say
+        so and turn motion off."""
         self.errors.append(message)
         self._disable()
 
@@ -425,7 +426,7 @@ class MotionController:
             try:
                 fit = self.joint_limiter.fit(start, v0, v1, end, limits, dt, is_braking_planned)
             except KinematicsError as exc:
-                self._fault(f"inverse kinematics failed: {exc}; motion stopped")
+                self.fault(f"inverse kinematics failed: {exc}; motion stopped")
                 return
             end = fit.end
             if not fit.is_exact:
@@ -687,9 +688,7 @@ class MotionController:
         elif isinstance(cmd, emc.EMC_JOINT_SET_MIN_FERROR):
             joint.set_ferror(joint.ferror_limit, cmd.ferror)
         elif isinstance(cmd, emc.EMC_JOINT_SET_BACKLASH):
-            if cmd.backlash < 0:
-                return f"backlash must be >= 0, got {cmd.backlash}"
-            joint.backlash = cmd.backlash
+            joint.set_backlash(cmd.backlash)
         planner.set_limits(max_vel, max_acc, min_limit, max_limit)
         return None
 
@@ -698,7 +697,7 @@ class MotionController:
         joint = self._joint(cmd.joint)
         if self.is_enabled or joint.is_homed:
             return "the motor offset can only be set while motion is off and unhomed"
-        joint.motor_offset = cmd.offset
+        joint.motor_offset = check_finite("motor offset", cmd.offset)
         joint.update_feedback(joint.motor_pos_fb)
         joint.hold_position()
         joint.update_command(self.period_s)
@@ -890,7 +889,7 @@ class MotionController:
         self.digital_in = list(inputs.digital_in) or self.digital_in
         self.analog_in = list(inputs.analog_in) or self.analog_in
         if self.is_enabled and not inputs.enable:
-            self._fault("motion disabled by the motion.enable pin")
+            self.fault("motion disabled by the motion.enable pin")
         self._check_hard_limits_and_faults(inputs)
         self._read_spindles(inputs.spindles)
         self._jog_wheels(inputs)
@@ -987,7 +986,7 @@ class MotionController:
             spindle.settle_periods = max(spindle.settle_periods - 1, 0)
             spindle.is_inhibited = pins.is_inhibited
             if pins.is_amp_fault and self.is_enabled:
-                self._fault(f"spindle {index} amplifier fault")
+                self.fault(f"spindle {index} amplifier fault")
             if spindle.is_orienting:
                 if pins.orient_fault:
                     spindle.is_orienting = False
@@ -1056,7 +1055,7 @@ class MotionController:
         try:
             targets = self.kins.inverse(pose)
         except KinematicsError as exc:
-            self._fault(f"inverse kinematics failed: {exc}; motion stopped")
+            self.fault(f"inverse kinematics failed: {exc}; motion stopped")
             return
         for joint, target in zip(self.joints, targets, strict=False):
             joint.pos_cmd = target
@@ -1074,20 +1073,27 @@ class MotionController:
         for index, joint in enumerate(self.joints):
             if inputs.amp_fault[index] and not self.is_faulted[index]:
                 self.is_faulted[index] = True
-                self._fault(f"joint {index} amplifier fault")
+                self.fault(f"joint {index} amplifier fault")
                 return
             if joint.is_on_limit_switch() and not (self.is_override_limits or joint.is_homing):
                 side = "positive" if joint.is_on_pos_limit else "negative"
-                self._fault(f"joint {index} on limit switch error ({side})")
+                self.fault(f"joint {index} on limit switch error ({side})")
                 return
 
     def _check_following_error(self) -> None:
-        """MIN_FERROR at rest rising to FERROR at max velocity (MOT-074)."""
+        """MIN_FERROR at rest rising to FERROR at max velocity (MOT-074); feedback that is
+        not a number is a fault too."""
         if not self.is_enabled:
             return
         for index, joint in enumerate(self.joints):
+            if not math.isfinite(joint.pos_fb):  # (NaN passes any limit comparison)
+                self.fault(
+                    f"joint {index} position feedback is {joint.motor_pos_fb} "
+                    f"(joint.{index}.motor-pos-fb)"
+                )
+                return
             if joint.is_following_error():
-                self._fault(f"joint {index} following error")
+                self.fault(f"joint {index} following error")
                 return
 
     # ================================================================ status

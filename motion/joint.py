@@ -111,9 +111,7 @@ class Joint:
     ) -> None:
         self.planner = FreePlanner(max_vel, max_acc, min_limit, max_limit)
         self.set_ferror(ferror, min_ferror)
-        self.backlash = check_finite("backlash", backlash)
-        if self.backlash < 0:
-            raise ValueError(f"backlash must be >= 0, got {backlash}")
+        self.set_backlash(backlash)
         self.comp = comp
         # compensation is slewed by its own small planner so that a direction reversal
         # never steps the motor: at a tenth of the joint's limits (MOT-072)
@@ -150,6 +148,13 @@ class Joint:
     @property
     def max_limit(self) -> float:
         return self.planner.max_limit
+
+    def set_backlash(self, backlash: float) -> None:
+        """[JOINT_n]BACKLASH: finite and >= 0 (ValueError saying why otherwise)."""
+        backlash = check_finite("backlash", backlash)
+        if backlash < 0:
+            raise ValueError(f"backlash must be >= 0, got {backlash}")
+        self.backlash = backlash
 
     def set_ferror(self, ferror: float, min_ferror: float) -> None:
         """FERROR is the limit at full speed, MIN_FERROR at rest (MOT-074)."""
@@ -197,9 +202,11 @@ class Joint:
         return abs(self.ferror) > self.following_error_limit()
 
     def hold_position(self) -> None:
-        """Command the position the joint is at (enabling, MOT-030): no jump."""
-        self.pos_cmd = self.coarse_pos = self.pos_fb
-        self.planner.reset(self.pos_fb)
+        """Command the position the joint is at (enabling, MOT-030): no jump. Feedback that
+        is not a number (a broken drive or encoder) is not a position: the command stays."""
+        here = self.pos_fb if math.isfinite(self.pos_fb) else self.pos_cmd
+        self.pos_cmd = self.coarse_pos = here
+        self.planner.reset(here)
         self._last_cmd = None
 
     def set_position(self, pos: float) -> None:

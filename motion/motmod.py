@@ -183,6 +183,7 @@ class Motmod:
             raise HalError(f"motmod: cannot connect to the NML buffers: {exc}") from None
         self.status = emc.EMC_MOTION_STAT()
         self.pending_errors: list[str] = []
+        self._is_period_error_said = False  # (an internal error, since motion was last on)
         self.hal = hal
         # what _write_pins last wrote of the values that seldom change
         self._written_generation = -1
@@ -233,7 +234,11 @@ class Motmod:
                 continue
             if cmd is None:
                 break
-            problem = self.controller.handle(cmd)
+            try:
+                problem = self.controller.handle(cmd)
+            except Exception as exc:  # (a bug, or a value nothing refused: see _internal_error)
+                self._internal_error(f"in {cmd.NAME}", exc)
+                problem = ""  # refused; the fault says why
             status = self.status
             status.command_type = cmd.TYPE
             status.echo_serial_number = cmd.serial_number
@@ -274,12 +279,29 @@ class Motmod:
             if state.is_orienting:  # (only an orient cycle reads these)
                 spindle.is_oriented, spindle.orient_fault = pins.is_oriented, pins.orient_fault
         controller = self.controller
-        controller.update(inputs)
+        try:
+            controller.update(inputs)
+        except Exception as exc:  # said once while it recurs with motion off
+            if controller.is_enabled or not self._is_period_error_said:
+                self._internal_error("in a servo period", exc)
+            self._is_period_error_said = True
+        else:
+            if controller.is_enabled:
+                self._is_period_error_said = False
         self._write_pins()
         self.pending_errors.extend(controller.errors)
         controller.errors.clear()
         controller.fill_status(self.status)
         self._publish()
+
+    def _internal_error(self, where: str, exc: Exception) -> None:
+        """What an exception inside the controller does: motion off (everything stops where
+        it is, the queue is emptied) and an error saying so. The host would otherwise
+        disable the function that raised it: motion would stop listening, or stop running,
+        and nobody would be told."""
+        self.controller.fault(
+            f"motion: internal error {where}: {type(exc).__name__}: {exc}; motion is off"
+        )
 
     def _write_pins(self) -> None:
         """Pins out. Values that change while moving are written every period; the rest

@@ -490,6 +490,11 @@ class TrajectoryPlanner:
         piece.vplan = min(piece.vcap, highest)
 
     def _append(self, move: Move, piece: Piece, ini_maxvel: float, acc: float) -> None:
+        end = piece.end if isinstance(piece, LinePiece) else piece.point(piece.length)
+        # finite targets can still make a path beyond floating point (a centre at 1e300,
+        # a line from -1e308 to 1e308): refused before anything is queued
+        if not all(map(math.isfinite, [piece.length, *end.tolist()])):
+            raise ValueError("the path is out of range (its length or end is not finite)")
         self._piece_limits(piece, ini_maxvel, acc)
         first_changed = len(self._pieces)
         prev_move = self._moves[-1] if self._moves else None
@@ -503,8 +508,8 @@ class TrajectoryPlanner:
         if prev_move is None or _feed_key(prev_move) != _feed_key(move):
             self._feed_points.append((piece.s0, move))
         self._moves.append(move)
-        self._end = piece.end if isinstance(piece, LinePiece) else piece.point(piece.length)
-        move.end_pos = self._end.copy()
+        self._end = end
+        move.end_pos = end.copy()
         if self._first_dirty is None or first_changed < self._first_dirty:
             self._first_dirty = first_changed
         dt = self.cycle_time

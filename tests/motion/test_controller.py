@@ -209,6 +209,27 @@ def test_following_error_disables_motion_and_says_so() -> None:
     assert not motion.is_enabled
 
 
+def test_feedback_that_is_not_a_number_stops_motion_and_the_command_holds() -> None:
+    """A drive or encoder component gone wrong (NaN on motor-pos-fb) is a fault, like a
+    following error, and never reaches the motor command: NaN compares false with any
+    following-error limit, so it would otherwise go unnoticed."""
+    motion = enabled_homed()
+    assert motion.handle(move(5.0)) is None
+    run(motion, 50)
+    before = [j.motor_pos_cmd for j in motion.joints]
+    assert before[0] > 0
+    n = 3
+    for _ in range(20):  # the broken feedback stays broken
+        fb = [math.nan] + [j.pos_cmd + j.motor_offset for j in motion.joints[1:]]
+        motion.update(Inputs(fb, [False] * n, [False] * n, [False] * n))
+    assert motion.errors == ["joint 0 position feedback is nan (joint.0.motor-pos-fb)"]
+    assert not motion.is_enabled
+    after = [j.motor_pos_cmd for j in motion.joints]
+    assert after == pytest.approx(before, abs=0.1)  # held near where it was, all finite
+    assert all(math.isfinite(v) for v in after)
+    assert all(math.isfinite(v) for v in motion.carte_pos_cmd)
+
+
 def test_hard_limit_switch_disables_motion_unless_overridden() -> None:
     motion = enabled_homed()
     n = 3

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import signal
 import time
 from collections.abc import Iterator
@@ -10,6 +11,7 @@ from pathlib import Path
 import pytest
 
 from hal.core import Hal
+from hal.rtapi_app import Host
 from nml import emc
 from nml.channels import EMC_ERROR, MOTION_COMMAND, MOTION_STATUS, Nml, load_config
 from nml.message import RCS_STATUS
@@ -253,3 +255,102 @@ def test_a_signal_linked_while_running_gets_the_value_of_its_new_writer(machine:
         assert linked.returncode == 0, linked.stderr
     assert settled_pin("joint.0.home-sw-in", 1) == 1
     assert settled_pin("joint.1.home-sw-in", 1) == 1  # (brake on while the spindle is off)
+
+
+def homed_in_coord_mode(task: Task) -> None:
+    configure(task)
+    assert task.send(emc.EMC_TRAJ_ENABLE()).status == RCS_STATUS.DONE
+    assert task.send(emc.EMC_JOINT_HOME(joint=-1)).status == RCS_STATUS.DONE
+    task.wait_for(lambda s: all(s.joint[i].homed for i in range(3)) and s.traj.inpos)
+    coord = emc.EMC_TRAJ_SET_MODE(mode=emc.EMC_TRAJ_MODE_ENUM.COORD)
+    assert task.send(coord).status == RCS_STATUS.DONE
+
+
+def errors_seen(task: Task, count: int, timeout: float = 10) -> list[str]:
+    deadline = time.monotonic() + timeout
+    errors: list[str] = []
+    while len(errors) < count and time.monotonic() < deadline:
+        errors += task.errors()
+        time.sleep(0.01)
+    return errors
+
+
+def test_an_arc_beyond_floating_point_is_refused_and_motion_goes_on(machine: Task) -> None:
+    """Finite fields whose path is not (a centre at 1e300): refused with the reason, and the
+    servo thread keeps running (it raised inside the planner's period before)."""
+    homed_in_coord_mode(machine)
+    machine.errors()
+    arc = emc.EMC_TRAJ_CIRCULAR_MOVE(type=emc.EMC_MOTION_TYPE.ARC, vel=10.0, ini_maxvel=30.0)
+    arc.acc = 500.0
+    arc.end.tran.x = 1.0
+    arc.center.x, arc.normal.z = -1e300, 1.0
+    assert machine.send(arc).status == RCS_STATUS.ERROR
+    assert errors_seen(machine, 1) == [
+        "EMC_TRAJ_CIRCULAR_MOVE: the path is out of range (its length or end is not finite)"
+    ]
+    assert machine.send(emc.EMC_TRAJ_ABORT()).status == RCS_STATUS.DONE
+    move = emc.EMC_TRAJ_LINEAR_MOVE(type=emc.EMC_MOTION_TYPE.FEED, vel=20.0, ini_maxvel=30.0)
+    move.acc = 500.0
+    move.end.tran.x = 2.0
+    assert machine.send(move).status == RCS_STATUS.DONE
+    stat = machine.wait_for(lambda s: s.traj.inpos and s.traj.position.tran.x > 1.99)
+    assert stat.traj.position.tran.x == pytest.approx(2.0)
+    assert stat.traj.enabled
+
+
+def test_a_drive_sending_nan_feedback_stops_motion_with_its_pin_named(machine: Task) -> None:
+    homed_in_coord_mode(machine)
+    machine.errors()
+    broken = run_cnc("halcmd", "unlinkp", "joint.1.motor-pos-fb")
+    assert broken.returncode == 0, broken.stderr
+    set_nan = run_cnc("halcmd", "setp", "joint.1.motor-pos-fb", "nan")
+    assert set_nan.returncode == 0, set_nan.stderr
+    stat = machine.wait_for(lambda s: not s.traj.enabled)
+    assert errors_seen(machine, 1) == ["joint 1 position feedback is nan (joint.1.motor-pos-fb)"]
+    assert math.isfinite(stat.joint[1].output)  # the command held where it was
+    assert math.isfinite(pin("joint.1.motor-pos-cmd"))
+
+
+def test_an_exception_inside_the_controller_turns_motion_off_and_says_so_once(monkeypatch) -> None:
+    """A bug the tests missed must not leave the machine deaf: the host disables a function
+    that raises, so motmod catches it, turns motion off and says so (once, though it recurs
+    every period), and goes on answering commands."""
+    task = Task()  # (the NML buffers' master)
+    hal = Hal()
+    host = Host(hal, is_rt=False)
+    try:
+        host.loadrt("trivkins", ["coordinates=XYZ"])
+        host.loadrt("motmod", ["servo_period_nsec=1000000", "num_joints=3"])
+        idle = host.threads["servo-thread"]  # this test runs motion's functions itself
+        idle.is_stopping = True
+        idle.join()
+        motmod, period = host.motmod, 1_000_000
+        task.task[MOTION_COMMAND].write(emc.EMC_TRAJ_ENABLE())
+        motmod.command_handler(period)
+        assert motmod.controller.is_enabled
+
+        def broken(*_args: object) -> None:
+            raise ZeroDivisionError("float division by zero")
+
+        monkeypatch.setattr(motmod.controller, "update", broken)
+        for _ in range(5):
+            motmod.controller_period(period)
+        assert not motmod.controller.is_enabled
+        assert task.errors() == [
+            "motion: internal error in a servo period: ZeroDivisionError: float division by "
+            "zero; motion is off"
+        ]
+        monkeypatch.setattr(motmod.controller, "handle", broken)
+        serial = task.task[MOTION_COMMAND].write(emc.EMC_TRAJ_ENABLE())
+        motmod.command_handler(period)
+        motmod.controller_period(period)
+        assert motmod.status.echo_serial_number == serial
+        assert motmod.status.status == RCS_STATUS.ERROR
+        assert task.errors() == [
+            "motion: internal error in EMC_TRAJ_ENABLE: ZeroDivisionError: float division by "
+            "zero; motion is off"
+        ]
+    finally:
+        host.unload_all()
+        hal.destroy()
+        task.close()
