@@ -99,13 +99,35 @@ class TeleopPlanner:
         want = want * _fit(np.array([np.linalg.norm(want)]), np.array([stop_speed]))
         change = want - self.vel
         step = change * _fit(np.abs(change), self.max_acc * dt)
-        new_vel = self.vel + step
+        new_vel = self._brake_for_each_limit(self.vel + step, dt)
         new_pos = self.pos + 0.5 * (self.vel + new_vel) * dt
         # stop at a limit, but never pull in an axis that is already beyond one
         low, high = np.minimum(self.min_pos, self.pos), np.maximum(self.max_pos, self.pos)
         self.pos = np.clip(new_pos, low, high)
         self.vel = np.where(self.pos == new_pos, new_vel, 0.0)
         return self.pos
+
+    def _brake_for_each_limit(self, vel: np.ndarray, dt: float) -> np.ndarray:
+        """``vel`` with each axis slowed, at its own deceleration, where it could not
+        otherwise stop before its position limit. A stop along one line (ABORT, a
+        smaller vector) decelerates as its slowest axis allows; an axis near its limit may
+        need its own, faster braking: the motion then leaves the line, never the limit.
+        (Clipping at the limit instead would stop that axis within one period.)"""
+        if not vel.any():
+            return vel
+        out = vel.tolist()
+        now = self.vel.tolist()
+        for i in np.flatnonzero(vel).tolist():
+            v, acc = out[i], float(self.max_acc[i])
+            room = self.max_pos[i] - self.pos[i] if v > 0 else self.pos[i] - self.min_pos[i]
+            if not math.isfinite(room):
+                continue
+            room = max(float(room) - _stop_reserve(acc, dt), 0.0)
+            toward = now[i] if v > 0 else -now[i]  # the speed toward that limit now (< 0: away)
+            cap = braking_speed(room, toward, acc, dt)
+            if abs(v) > cap:  # (never below what one period of braking leaves)
+                out[i] = math.copysign(max(cap, toward - acc * dt, 0.0), v)
+        return np.array(out)
 
 
 @dataclass(frozen=True)

@@ -203,6 +203,25 @@ def test_jog_stop_pin_stops_the_teleop_vector_too() -> None:  # motion(9) jog-st
     assert motion.carte_pos_cmd.x == position
 
 
+def test_abort_near_a_soft_limit_stops_every_axis_before_it() -> None:  # MOT-021, MOT-046
+    """Z jogs toward its limit, braking for it at its own deceleration, while X runs at
+    full speed; an ABORT then stops both along one line, whose deceleration X sets (a
+    third of Z's): along that line Z would pass its limit by a millimetre. Z brakes for the
+    limit on its own instead (the stop leaves the line, never the soft limit)."""
+    motion = make("corexy", AXIS_VEL, AXIS_ACC)
+    assert motion.handle(jog_cont(2, -AXIS_VEL)) is None
+    run(motion, 350)
+    assert motion.handle(jog_cont(0, AXIS_VEL)) is None
+    run(motion, 218)
+    assert -50.0 < pose(motion)[2] < -49.4 and motion.axis_planners[2].vel < -30.0
+    assert motion.handle(emc.EMC_TRAJ_ABORT()) is None
+    path = run(motion, 1000)
+    assert motion.is_in_position
+    assert_within_joint_limits(path, AXIS_VEL, AXIS_ACC)
+    assert pose(motion)[2] >= -SOFT_LIMIT
+    assert pose(motion)[0] > 20.0  # X took its own time to stop
+
+
 # ------------------------------------------------------------------------ properties
 ACTIONS = st.one_of(
     st.tuples(st.just("vector"), st.lists(st.floats(-150, 150), min_size=3, max_size=3)),
