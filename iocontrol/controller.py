@@ -24,6 +24,7 @@ from __future__ import annotations
 import signal
 import sys
 import time
+import traceback
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -303,9 +304,9 @@ class IoControl:
         self._warn(text)
         if self.nml is None:
             return
-        data = text.encode("utf-8")[: emc.LINELEN - 1].decode("utf-8", errors="ignore")
         try:
-            self.nml[EMC_ERROR].write(emc.EMC_OPERATOR_ERROR(id=0, error=data))
+            message = emc.EMC_OPERATOR_ERROR(id=0, error=emc.fit_text(text))
+            self.nml[EMC_ERROR].write(message, is_oldest_dropped=True)  # (never waits)
         except NmlError as exc:
             self._warn(f"cannot report the error on {EMC_ERROR}: {exc}")
 
@@ -323,6 +324,11 @@ class IoControl:
         except (CommandError, ToolChangeError) as exc:
             self.has_command_failed = True
             self.report_error(str(exc))
+        except Exception as exc:  # a bug: this command fails, iocontrol goes on
+            self.has_command_failed = True
+            traceback.print_exc()
+            kind = type(exc).__name__
+            self.report_error(f"iocontrol: internal error in {msg.NAME}: {kind}: {exc}")
         if isinstance(msg, emc.EMC_TOOL_CMD_MSG):
             self._commit_table()
         self._write_outputs()  # now, so a HAL loopback answers before the next update

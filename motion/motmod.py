@@ -395,7 +395,8 @@ class Motmod:
         errors = self.nml[EMC_ERROR]
         while self.pending_errors:
             try:
-                errors.write(emc.EMC_OPERATOR_ERROR(error=self.pending_errors[0][:255]))
+                message = emc.EMC_OPERATOR_ERROR(error=emc.fit_text(self.pending_errors[0]))
+                errors.write(message, is_oldest_dropped=True)
             except NmlTimeoutError:
                 return
             self.pending_errors.pop(0)

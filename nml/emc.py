@@ -48,6 +48,15 @@ LINELEN = 255  # length of file names, MDI commands and operator messages
 EMC_SYSTEM_CMD_LEN = 256
 EMC_PLUGIN_CALL_LEN = 900  # MAX_NML_COMMAND_SIZE - 100 in LinuxCNC
 
+
+def fit_text(text: str, size: int = LINELEN) -> str:
+    """The longest start of ``text`` whose UTF-8 fits a C string field of ``size`` bytes
+    (with its NUL), cut at a character boundary: as LinuxCNC, long operator messages, file
+    names and MDI texts are cut short, never refused. (A text field refuses what does not
+    fit, so a cut by characters, ``text[:255]``, fails on non-ASCII text.)"""
+    return text.encode("utf-8")[: size - 1].decode("utf-8", errors="ignore")
+
+
 EMCMOT_MAX_JOINTS = 16
 EMCMOT_MAX_AXIS = 9
 EMCMOT_MAX_SPINDLES = 8

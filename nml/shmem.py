@@ -526,12 +526,17 @@ class ShmBuffer:
                 return is_ready()
 
     # ------------------------------------------------------------------ write
-    def write(self, msg: NMLmsg, timeout: float | None = None) -> int:
+    def write(
+        self, msg: NMLmsg, timeout: float | None = None, *, is_oldest_dropped: bool = False
+    ) -> int:
         """Write a message; returns the serial number given to a command, else 0.
 
         Commands get the next serial number of this buffer, assigned under the mutex, so two
         writers can never produce the same number (NML-041). ``timeout`` (seconds, < 0
-        forever) replaces the P line's for this write.
+        forever) replaces the P line's for this write. A full queue makes the write wait for
+        room, up to the timeout; with ``is_oldest_dropped`` the oldest messages make room
+        instead, at once: for operator messages, which nobody may be reading (a headless
+        machine), the newest are the ones to keep, and the writer must not stall.
         """
         wait_s = self.timeout if timeout is None else (math.inf if timeout < 0 else timeout)
         self._require_open()
@@ -561,6 +566,9 @@ class ShmBuffer:
                 if self.is_broadcast:
                     self._trim_broadcast()
                 while not self._queue_has_room(len(data)):
+                    if is_oldest_dropped and self._get("count"):
+                        self._queue_pop_front()
+                        continue
                     self._unlock()
                     if not self._wait_for_change(lambda: self._queue_has_room(len(data)), deadline):
                         raise NmlTimeoutError(

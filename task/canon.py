@@ -160,11 +160,6 @@ def _pose_values(pose: emc.EmcPose) -> list[float]:
     return [t.x, t.y, t.z, pose.a, pose.b, pose.c, pose.u, pose.v, pose.w]
 
 
-def _fit(text: str, size: int = emc.LINELEN) -> str:
-    """``text`` cut to fit a C string field of ``size`` bytes (with its NUL)."""
-    return text.encode()[: size - 1].decode(errors="ignore")
-
-
 def _ratio(length: float, seconds: float, fallback: float) -> float:
     """``length / seconds``; ``fallback`` when no axis limit made the move take time."""
     return length / seconds if seconds > 0.0 else fallback
@@ -331,7 +326,7 @@ class TaskCanon:
 
     def _error(self, text: str) -> None:
         """emccanon's CANON_ERROR: a message for the operator's error channel."""
-        self._queue(emc.EMC_OPERATOR_ERROR(id=0, error=_fit(text)))
+        self._queue(emc.EMC_OPERATOR_ERROR(id=0, error=emc.fit_text(text)))
 
     # ================================================================ limits
     def _straight(self, end: Sequence[float]) -> _Straight:
@@ -931,7 +926,7 @@ class TaskCanon:
             self._probe_file = None
 
     def MESSAGE(self, text: str) -> None:
-        self._queue(emc.EMC_OPERATOR_DISPLAY(id=0, display=_fit(text)))
+        self._queue(emc.EMC_OPERATOR_DISPLAY(id=0, display=emc.fit_text(text)))
 
     def LOG(self, text: str) -> None:
         self._flush()
@@ -1077,7 +1072,8 @@ class TaskCanon:
         program = self.setup.user_m_commands.get(index)
         if program is None:
             return False
-        self._queue(emc.EMC_SYSTEM_CMD(string=_fit(f"{program} {p:f} {q:f}", 256)))
+        command = emc.fit_text(f"{program} {p:f} {q:f}", emc.EMC_SYSTEM_CMD_LEN)
+        self._queue(emc.EMC_SYSTEM_CMD(string=command))
         return True
 
     # ================================================================ GET_EXTERNAL_*

@@ -208,10 +208,14 @@ class Task:
         self.refresh()
         if cmd is not None:
             self.handle(cmd)
-        self._watch_estop()
-        self._plan()
-        self._execute()
-        self._finish_runs()
+        try:
+            self._watch_estop()
+            self._plan()
+            self._execute()
+            self._finish_runs()
+        except Exception as exc:  # a bug: what runs stops, task goes on (see _internal_error)
+            self.operator_error(self._internal_error("running the program", exc))
+            self._abort()
         self.publish()
 
     def _next_command(self, timeout: float) -> emc.NMLmsg | None:
@@ -233,6 +237,8 @@ class Task:
             outcome = handler(cmd)
         except (InterpError, ValueError) as exc:
             outcome = str(exc)
+        except Exception as exc:  # a bug: this command fails, task goes on
+            outcome = self._internal_error(f"in {cmd.NAME}", exc)
         if outcome is True:  # still running: answered when it finishes
             self.pending_serial = cmd.serial_number
             return
@@ -243,6 +249,14 @@ class Task:
             stat.status = RCS_STATUS.DONE
         self.refresh()
         self.publish()
+
+    @staticmethod
+    def _internal_error(where: str, exc: Exception) -> str:
+        """The operator's message for an exception nothing expected (a bug, or a value that
+        nothing refused); its traceback goes to the log. Task itself goes on: a crash
+        would stop the whole machine."""
+        log.error("internal error %s", where, exc_info=exc)
+        return f"task: internal error {where}: {type(exc).__name__}: {exc}"
 
     def _forward(self, cmd: emc.NMLmsg) -> str | None:
         """Manual commands: motion's and iocontrol's own, sent on when allowed."""
@@ -352,7 +366,7 @@ class Task:
         return self._start_mdi(cmd.command)
 
     def _start_mdi(self, text: str) -> str | bool:
-        self.stat.task.command = text[:255]
+        self.stat.task.command = emc.fit_text(text)
         self.canon.set_status(self.stat)
         self.interp.synch()
         self.checked_motion_serial = self.last_motion_serial
@@ -753,7 +767,7 @@ class Task:
         task.task_paused = self.is_paused
         task.optional_stop_state = self.is_optional_stop
         task.block_delete_state = self.is_block_delete
-        task.file = self.file[:255]
+        task.file = emc.fit_text(self.file)
         task.callLevel = interp.call_level
         task.motionLine = self.stat.motion.traj.id
         task.currentLine = self.current_line
@@ -773,7 +787,7 @@ class Task:
         _store(task.g5x_offset, params[base : base + 9])
         task.g5x_index = system
         _store(task.g92_offset, params[5211:5220])
-        task.ini_filename = self.ini.path[:255]
+        task.ini_filename = emc.fit_text(self.ini.path)
         try:
             self.nml[EMC_STATUS].write(self.stat)
         except NmlError as exc:
@@ -781,14 +795,14 @@ class Task:
 
     # ================================================================ messages
     def operator_error(self, text: str) -> None:
-        self._write_error_channel(emc.EMC_OPERATOR_ERROR(error=text[:255]))
+        self._write_error_channel(emc.EMC_OPERATOR_ERROR(error=emc.fit_text(text)))
 
     def operator_text(self, text: str) -> None:
-        self._write_error_channel(emc.EMC_OPERATOR_TEXT(text=text[:255]))
+        self._write_error_channel(emc.EMC_OPERATOR_TEXT(text=emc.fit_text(text)))
 
     def _write_error_channel(self, msg: emc.NMLmsg) -> None:
-        try:
-            self.nml[EMC_ERROR].write(msg)
+        try:  # (never waits: with nobody reading, the oldest messages go)
+            self.nml[EMC_ERROR].write(msg, is_oldest_dropped=True)
         except NmlError as exc:
             log.error("cannot write to the error channel: %s", exc)
 

@@ -67,7 +67,7 @@ def _clipped(value: Any) -> str:
     """An operator message, cut to what fits (LinuxCNC truncates these silently)."""
     if not isinstance(value, str):
         raise TypeError(f"message must be str, not {type(value).__name__}")
-    return value.encode("utf-8")[:TEXT_LIMIT].decode("utf-8", errors="ignore")
+    return emc.fit_text(value)
 
 
 def serial_difference(echoed: int, serial: int) -> int:

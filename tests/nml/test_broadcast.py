@@ -92,6 +92,18 @@ def test_a_slow_reader_holds_messages_and_the_writer_waits_then_fails(opened) ->
     assert indexes(fast) == [written] and indexes(slow) == [written]
 
 
+def test_operator_messages_drop_the_oldest_instead_of_waiting(opened) -> None:
+    """A reader that never reads (a headless machine's forgotten connection) must not stall
+    the writer: the oldest messages make room at once and the newest are kept, in order."""
+    opened("m")
+    idle, writer = opened("ui"), opened("w")
+    for index in range(500):  # many times what the queue holds
+        writer.write(TEST_CMD(index=index), is_oldest_dropped=True)
+    kept = indexes(idle)
+    assert 5 < len(kept) < 500
+    assert kept == list(range(500 - len(kept), 500))
+
+
 def test_a_reader_that_leaves_no_longer_holds_messages(opened) -> None:
     opened("m")
     staying, leaving, writer = opened("ui"), opened("ui"), opened("w")

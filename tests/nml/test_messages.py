@@ -5,6 +5,7 @@ from __future__ import annotations
 import msgpack
 import pytest
 
+from nml import emc
 from nml.codec import HEADER, Encoding, decode, encode, max_encoded_size, peek_type
 from nml.errors import NmlFormatError, NmlRegistryError
 from nml.message import RCS_CMD_MSG, RCS_STAT_MSG, RCS_STATUS, Struct, array, f64, i32, string
@@ -82,6 +83,19 @@ def test_msgpack_is_the_leaf_values_in_declaration_order() -> None:
 def test_text_that_does_not_fit_is_refused() -> None:
     with pytest.raises(ValueError, match=r"DEMO_MOVE\.label: 9 bytes do not fit in 8"):
         DEMO_MOVE(label="123456789")
+
+
+def test_fit_text_cuts_a_long_text_at_a_character_boundary() -> None:
+    """Operator messages, file names and MDI texts are cut to their field, never refused;
+    cutting by characters (text[:255]) gave non-ASCII texts too many bytes, and task
+    crashed on such an error message."""
+    text = "fichero ñandú " * 40  # 2 bytes per ñ and ú
+    fitted = emc.fit_text(text)
+    assert len(fitted.encode("utf-8")) <= emc.LINELEN - 1
+    assert text.startswith(fitted) and len(fitted) > 200
+    assert emc.EMC_OPERATOR_ERROR(error=fitted).error == fitted
+    assert emc.fit_text("short") == "short"
+    assert emc.fit_text("ñ" * 10, size=6) == "ññ"  # 5 bytes: the third ñ would be cut in two
 
 
 def test_unknown_field_is_refused() -> None:

@@ -141,6 +141,38 @@ def test_bad_mdi_line_is_an_error_with_the_interpreters_text(machine: Machine) -
     assert (cnc.OPERATOR_ERROR, "Cannot do g1 with zero feed rate") in machine.messages()
 
 
+def test_a_long_non_ascii_error_is_cut_to_fit_and_task_goes_on(machine: Machine) -> None:
+    """The error for a missing program repeats its name: with 2-byte characters it was
+    longer than the message field, and task crashed writing it (the machine shut down)."""
+    machine.ready_to_move()
+    machine.messages(0.1)
+    c = machine.command
+    c.mode(cnc.MODE_AUTO)
+    c.wait_complete()
+    missing = machine.folder / ("ñandú" * 24 + ".ngc")  # the name alone: 168 bytes
+    c.program_open(str(missing))
+    assert c.wait_complete(5) == cnc.RCS_ERROR
+    errors = [text for kind, text in machine.messages() if kind == cnc.OPERATOR_ERROR]
+    assert len(errors) == 1 and "ñandú" in errors[0], errors
+    assert len(errors[0].encode("utf-8")) < 255
+    c.mode(cnc.MODE_MDI)
+    c.wait_complete()
+    c.mdi("G0 X1")
+    assert c.wait_complete(10) == cnc.RCS_DONE  # task is still there
+
+
+def test_errors_nobody_reads_keep_the_newest_and_never_stall_task(machine: Machine) -> None:
+    """A headless machine whose error channel nobody drains: once the queue is full the
+    oldest messages make room (task used to wait a second for room, then drop the newest)."""
+    c = machine.command
+    for index in range(150):  # far more than the channel holds
+        c.error_msg(f"note {index}")
+        assert c.wait_complete(5) == cnc.RCS_DONE
+    kept = [text for kind, text in machine.messages() if kind == cnc.OPERATOR_ERROR]
+    assert 10 < len(kept) < 150
+    assert kept == [f"note {index}" for index in range(150 - len(kept), 150)]
+
+
 def test_commands_in_the_wrong_state_or_mode_are_refused(machine: Machine) -> None:
     c = machine.command
     c.mode(cnc.MODE_MDI)
