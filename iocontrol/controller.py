@@ -328,7 +328,7 @@ class IoControl:
             self.has_command_failed = True
             traceback.print_exc()
             kind = type(exc).__name__
-            self.report_error(f"iocontrol: internal error in {msg.NAME}: {kind}: {exc}")
+            self.report_error(f"internal error in {msg.NAME}: {kind}: {exc}")
         if isinstance(msg, emc.EMC_TOOL_CMD_MSG):
             self._commit_table()
         self._write_outputs()  # now, so a HAL loopback answers before the next update
@@ -420,6 +420,8 @@ class IoControl:
         self._reload_table(self.table_path)
 
     def _load_tool_table(self, msg: emc.EMC_TOOL_LOAD_TOOL_TABLE) -> None:
+        if "\0" in msg.file:  # (no file can have that name: the OS refuses it)
+            raise CommandError(f"tool table file name {msg.file!r} holds a NUL character")
         path = Path(msg.file) if msg.file else self.table_path
         self._reload_table(path)
 

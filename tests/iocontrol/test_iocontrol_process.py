@@ -332,6 +332,13 @@ def test_reload_of_a_bad_tool_table_reports_file_and_line(machine: Machine) -> N
     assert st.status == RCS_STATUS.DONE and st.tool.pocketPrepped == 2
 
 
+def test_a_tool_table_name_no_file_can_have_is_refused_with_why(machine: Machine) -> None:
+    machine.errors()
+    st = machine.run(emc.EMC_TOOL_LOAD_TOOL_TABLE(file="tools\0.tbl"))
+    assert st.status == RCS_STATUS.ERROR
+    assert machine.errors() == ["tool table file name 'tools\\x00.tbl' holds a NUL character"]
+
+
 def test_unknown_and_unsupported_commands_are_reported(machine: Machine) -> None:
     st = machine.run(emc.EMC_AUX_INPUT_WAIT(index=0))
     assert st.status == RCS_STATUS.ERROR
