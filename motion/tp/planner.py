@@ -1124,7 +1124,12 @@ def _piece_braking(q: Piece, dist: float, v: float, dt: float) -> float:
             braking_speed(dist - tail - body, v, acc_head, dt, q.v_body),
             braking_speed(dist - tail, v, acc, dt, q.v_mid),
         )
-    in_tail_next = braking_speed(dist, v, acc_tail, dt, q.v_exit)
+    # the tail's curve (at its lower acceleration) only where this period may end in it:
+    # drawn back farther into the body, it would brake for the tail from afar
+    if dist - tail <= (v + acc * dt) * dt:
+        in_tail_next = braking_speed(dist, v, acc_tail, dt, q.v_exit)
+    else:
+        in_tail_next = math.inf
     if body > 0.0:  # in the body: its end and the tail's
         return min(braking_speed(dist - tail, v, acc, dt, q.v_mid), in_tail_next)
     if head > 0.0:  # no body: head then tail
