@@ -44,6 +44,18 @@ def path_length(delta: np.ndarray) -> float:
     return length if length > EPS else 0.0
 
 
+def flat_normal_share(normal_fraction: float) -> float:
+    """The centripetal share of the acceleration budget on a flat circle.
+
+    On a flat circle the tangential and centripetal accelerations turn together in the
+    plane, so on every axis they add up in quadrature, not linearly: exactly,
+    |a_i| <= sqrt(a_t**2 + a_n**2) * (the axis's share of the plane). Keeping the
+    tangential share that the linear rule leaves at the speed cap (1 - ``normal_fraction``),
+    the centripetal part may take sqrt(1 - (1 - normal_fraction)**2) of the budget: 0.866
+    for 0.5, LinuxCNC's split for its blend arcs."""
+    return math.sqrt(1.0 - (1.0 - normal_fraction) ** 2)
+
+
 def norm(v: np.ndarray) -> float:
     """Euclidean length: what np.linalg.norm computes for a vector, without its
     Python-level overhead (several microseconds for a few values)."""
@@ -203,6 +215,11 @@ class ArcPiece(Piece):
 
     __slots__ = ("centre", "dr", "e1", "e2", "full_length", "h", "has_h", "k", "r0", "theta")
 
+    @property
+    def is_flat(self) -> bool:
+        """A circle (no spiral, no helix or other axes moving along): see apply_limits."""
+        return not self.has_h and abs(self.dr) <= EPS
+
     def __init__(
         self,
         move: object,
@@ -269,6 +286,40 @@ class ArcPiece(Piece):
     def trim_end(self, d: float) -> None:
         self.theta -= d * self.k
         self.length -= d
+
+    def apply_limits(
+        self,
+        max_acc: Sequence[float],
+        inv_vel: Sequence[float],
+        inv_acc: Sequence[float],
+        move_vel: float,
+        move_acc: float,
+        normal_fraction: float,
+    ) -> None:
+        """As ``Piece.apply_limits``; on a flat circle with the exact, quadrature bound of
+        ``flat_normal_share`` instead of the linear sum of ``axis_bounds`` (which holds for
+        spirals and helices too, but overstates a circle's axis accelerations up to 1.41x)."""
+        if not self.is_flat:
+            super().apply_limits(max_acc, inv_vel, inv_acc, move_vel, move_acc, normal_fraction)
+            return
+        # per unit of path: axis i moves at v * (r k) * plane_i; its acceleration is at most
+        # sqrt(a_t**2 + (v**2 k)**2) * (r k) * plane_i
+        rk = self.r0 * self.k
+        plane = list(map(math.hypot, self.e1.tolist(), self.e2.tolist()))
+        vcap = move_vel
+        worst = rk * max(map(mul, plane, inv_vel))
+        if worst > 0:
+            vcap = min(vcap, 1.0 / worst)
+        worst = rk * max(map(mul, plane, inv_acc))
+        acc = move_acc
+        if worst > 0 and self.k > 0:
+            reach = 1.0 / worst  # the largest sqrt(a_t**2 + a_n**2) every axis allows
+            share = flat_normal_share(normal_fraction)
+            vcap = min(vcap, math.sqrt(share * reach / self.k))
+            normal = vcap * vcap * self.k
+            acc = min(acc, math.sqrt(max(reach * reach - normal * normal, 0.0)))
+        self.vcap = max(vcap, 0.0)
+        self.acc = self.acc_head = self.acc_tail = max(acc, EPS)
 
     def axis_bounds(self) -> tuple[list[float], list[float] | None]:
         rmax = max(self.r0, self.r0 + self.dr * self.theta)

@@ -53,6 +53,7 @@ from motion.tp.geometry import (
     blend_arc,
     circle_piece,
     cross3,
+    flat_normal_share,
     norm,
 )
 from motion.tp.spindlesync import RigidTap, follow_speed
@@ -598,7 +599,8 @@ class TrajectoryPlanner:
                 plane = math.sqrt(a1 * a1 + inward * inward)
                 if plane > EPS:
                     plane_acc = min(plane_acc, axis_acc / plane)
-            radius = min(radius, w_full * w_full / (NORMAL_FRACTION * plane_acc))
+            normal_acc = flat_normal_share(NORMAL_FRACTION) * plane_acc  # (a flat arc)
+            radius = min(radius, w_full * w_full / normal_acc)
         d = radius * tan_half
         if d <= 1e-9:
             return None
