@@ -7,10 +7,10 @@ polyline, and the planner's time per servo period (queueing the period's moves p
 ``step``): ``planner_us_per_period`` is this thread's CPU time, which other processes do
 not inflate; ``planner_wall_us_per_period`` is wall time.
 
-There is no interpreter in the tree yet, so a tiny reader here understands just what
-these programs use: G0/G1/G2/G3 with X Y Z I J K F (P turns), G17/G18/G19, G61, G61.1
-and G64 [P]. Every program starts at
-X0 Y0 Z10, as the reference bench does.
+A tiny reader here, not the interpreter, understands just what these programs use
+(G0/G1/G2/G3 with X Y Z I J K F (P turns), G17/G18/G19, G61, G61.1 and G64 [P]), so the
+planner alone is measured; the O-word programs are left to motion_bench.py. Every program
+starts at X0 Y0 Z10, as the reference bench does.
 
     .venv/bin/python scripts/bench/tp_bench.py [--programs circle_g64 ...] [--adds-per-period N]
 """
