@@ -371,7 +371,7 @@ class Host:
             for funct in set(self.functs) - old_functs:
                 del self.functs[funct]
             for thread in set(self.threads) - old_threads:
-                self._stop_thread(thread)
+                self.stop_thread(thread)
             raise
         gc.collect()
         gc.freeze()
@@ -471,13 +471,15 @@ class Host:
     def _remove(self, comp: str) -> None:
         for name, thread in list(self.threads.items()):
             if thread.creator == comp:
-                self._stop_thread(name)
+                self.stop_thread(name)
         for name in [n for n, f in self.hal.meta["functs"].items() if f["owner"] == comp]:
             self.functs.pop(name, None)
         with contextlib.suppress(HalError):
             self.hal.remove_component(comp)
 
-    def _stop_thread(self, name: str) -> None:
+    def stop_thread(self, name: str) -> None:
+        """End a thread and remove it (its functions stay loaded): also for a process that
+        calls the functions itself, where an idle thread would only take the GIL."""
         thread = self.threads.pop(name)
         thread.is_stopping = True
         thread.join(timeout=2)
@@ -502,7 +504,7 @@ class Host:
         for name in reversed(list(self.modules)):
             self.unloadrt(name)
         for name in list(self.threads):
-            self._stop_thread(name)
+            self.stop_thread(name)
 
     # ------------------------------------------------------------ command channel
     def handle(self, request: dict[str, Any]) -> dict[str, Any]:

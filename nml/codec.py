@@ -15,7 +15,6 @@ never lets garbage through as a message.
 from __future__ import annotations
 
 import enum
-import re
 import struct
 
 import msgpack
@@ -106,7 +105,6 @@ def max_encoded_size(cls: type[NMLmsg], encoding: Encoding) -> int:
 
 def _msgpack_bound(cls: type[NMLmsg]) -> int:
     """Worst-case msgpack bytes of the flat value array: 9 per number, a header per text."""
-    codes = cls.flat_format.format.lstrip("<")
-    texts = [int(n) for n in re.findall(r"(\d+)s", codes)]
-    numbers = len(re.sub(r"\d+s", "", codes))
+    texts = [int(code[:-1]) for code in cls.flat_codes if code.endswith("s")]
+    numbers = len(cls.flat_codes) - len(texts)
     return 5 + 9 * numbers + sum(length + 5 for length in texts)

@@ -239,6 +239,7 @@ class Struct:
     dtype: ClassVar[np.dtype] = np.dtype([])
     flat_format: ClassVar[struct.Struct] = struct.Struct("<")
     flat_text_indexes: ClassVar[tuple[int, ...]] = ()
+    flat_codes: ClassVar[tuple[str, ...]] = ()  # ``struct`` code of each leaf ("d", "255s")
     layout_crc: ClassVar[int] = 0
     __slots__ = ("_arr",)
 
@@ -268,7 +269,7 @@ class Struct:
         cls.fields = tuple(fields)
         cls.defaults = defaults
         cls.dtype = np.dtype([f.marker.dtype_entry(f.name) for f in fields])
-        codes = _flat_codes(cls.dtype)
+        cls.flat_codes = codes = tuple(_flat_codes(cls.dtype))
         cls.flat_format = struct.Struct("<" + "".join(codes))
         cls.flat_text_indexes = tuple(i for i, code in enumerate(codes) if code.endswith("s"))
         cls.layout_crc = zlib.crc32(f"{cls.__name__}:{cls.dtype.descr}".encode())

@@ -65,9 +65,7 @@ class Bench:
         # motmod creates servo-thread, as LinuxCNC's does; here this process calls motion's
         # functions itself, and an idle thread waking every period would take the GIL from
         # it (whenever numpy or a semaphore releases it) and count in its figures
-        idle = self.host.threads["servo-thread"]
-        idle.is_stopping = True
-        idle.join()
+        self.host.stop_thread("servo-thread")
         self.commands = self.task[MOTION_COMMAND]
 
     def close(self) -> None:

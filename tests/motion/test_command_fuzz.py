@@ -10,7 +10,6 @@ motion would stop listening or stop running. motmod reports such a bug and turns
 from __future__ import annotations
 
 import math
-import re
 import struct
 
 import hypothesis.strategies as st
@@ -43,13 +42,6 @@ def _leaf_value(code: str) -> st.SearchStrategy:
     return st.binary(max_size=int(code[:-1]))  # a text field: "<n>s"
 
 
-def _leaf_codes(cls: type[emc.NMLmsg]) -> list[str]:
-    codes = []
-    for count, code in re.findall(r"(\d*)([a-zA-Z?])", cls.flat_format.format):
-        codes += [f"{count}s"] if code == "s" else [code] * int(count or 1)
-    return codes
-
-
 @st.composite
 def commands(draw: st.DrawFn) -> emc.NMLmsg:
     """A command with raw bytes for its fields, or with odd but well-formed values."""
@@ -57,7 +49,7 @@ def commands(draw: st.DrawFn) -> emc.NMLmsg:
     if draw(st.booleans()):
         size = cls.fixed_size()
         return cls.from_bytes(draw(st.binary(min_size=size, max_size=size)))
-    values = [draw(_leaf_value(code)) for code in _leaf_codes(cls)]
+    values = [draw(_leaf_value(code)) for code in cls.flat_codes]
     return cls.from_flat(values)
 
 

@@ -321,9 +321,7 @@ def test_an_exception_inside_the_controller_turns_motion_off_and_says_so_once(mo
     try:
         host.loadrt("trivkins", ["coordinates=XYZ"])
         host.loadrt("motmod", ["servo_period_nsec=1000000", "num_joints=3"])
-        idle = host.threads["servo-thread"]  # this test runs motion's functions itself
-        idle.is_stopping = True
-        idle.join()
+        host.stop_thread("servo-thread")  # this test runs motion's functions itself
         motmod, period = host.motmod, 1_000_000
         task.task[MOTION_COMMAND].write(emc.EMC_TRAJ_ENABLE())
         motmod.command_handler(period)

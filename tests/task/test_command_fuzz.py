@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import math
 import random
-import re
 
 import cnc
 from nml.message import MessageKind, NMLmsg
@@ -20,19 +19,12 @@ INTS = [0, 1, -1, 2, 3, 5, 9, 100, 2**31 - 1, -(2**31)]
 TEXTS = [b"", b"x", b"G0 X1", b"/no/such/file.ngc", "ñ".encode() * 100, b"M2", b"a\0b"]
 
 
-def _leaf_codes(cls: type[NMLmsg]) -> list[str]:
-    codes = []
-    for count, code in re.findall(r"(\d*)([a-zA-Z?])", cls.flat_format.format):
-        codes += [f"{count}s"] if code == "s" else [code] * int(count or 1)
-    return codes
-
-
 def random_command(rng: random.Random, cls: type[NMLmsg]) -> NMLmsg:
     """Raw bytes for every field, or odd but well-formed values."""
     if rng.random() < 0.5:
         return cls.from_bytes(rng.randbytes(cls.fixed_size()))
     values: list[object] = []
-    for code in _leaf_codes(cls):
+    for code in cls.flat_codes:
         if code == "d":
             values.append(rng.choice(FLOATS))
         elif code == "f":
