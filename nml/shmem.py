@@ -48,10 +48,16 @@ from nml.message import RCS_CMD_MSG, NMLmsg
 log = logging.getLogger("nml")
 
 MAGIC = 0x314C4D4E  # "NML1"
-LAYOUT_VERSION = 3
+LAYOUT_VERSION = 4
 KIND_LATEST, KIND_QUEUE = 0, 1
 WRAP = 0xFFFFFFFF
 _LOCK_SLICE_S = 0.2  # how often a waiter for the mutex checks that its holder is alive
+# A live process holding the mutex longer than this is reported (once per episode) with its
+# pid: a stuck process (SIGSTOP, a debugger) that blocks everyone else.
+LOCK_HELD_REPORT_S = 1.0
+# A status write that stays "in progress" this long with nobody holding the mutex was not
+# a write: the sequence counter is corrupt, and the reader resets the buffer.
+_STUCK_WRITE_S = 0.05
 
 # Header fields: name -> (offset, struct format). All offsets are 8-byte aligned.
 _HEADER_FIELDS = {
@@ -73,6 +79,7 @@ _HEADER_FIELDS = {
     "used": (96, "<Q"),
     "count": (104, "<Q"),
     "next_serial": (112, "<Q"),
+    "locked_at": (120, "<Q"),  # monotonic ns when the holder took the mutex
 }
 HEADER_SIZE = 128
 # Connection slot fields: name -> (offset in the slot, struct format).
@@ -82,8 +89,9 @@ _SLOT_FIELDS = {
     "is_waiting": (8, "<I"),  # sleeping on its wake semaphore
     "is_reader": (12, "<I"),  # holds broadcast messages until it has read them
     "cursor": (16, "<Q"),  # broadcast: sequence number of the last message it read
+    "missed": (24, "<I"),  # broadcast: messages dropped before it read them (queue full)
 }
-SLOT_SIZE = 24
+SLOT_SIZE = 32
 RECORD = struct.Struct("<IIQ")  # queue record: length, reserved, sequence number
 _U64 = struct.Struct("<Q")
 _IDENTITY = struct.Struct("<II")  # magic, version at offset 0
@@ -182,6 +190,7 @@ class ShmBuffer:
         self._slot = -1
         self._last_seen = 0
         self._is_locked = False
+        self._reported_holder = 0  # the stuck lock holder last logged
         self._mm: mmap.mmap | None = None
         self._view: memoryview | None = None
         if self.is_master:
@@ -213,14 +222,8 @@ class ShmBuffer:
                 posix_ipc.unlink_semaphore(name)
         self._mutex = posix_ipc.Semaphore(self._mutex_name, posix_ipc.O_CREX, 0o660, 1)
         self._repair = posix_ipc.Semaphore(self._repair_name, posix_ipc.O_CREX, 0o660, 1)
-        self._put("version", LAYOUT_VERSION)
-        self._put("kind", KIND_QUEUE if self.is_queue else KIND_LATEST)
-        self._put("encoding", int(self.encoding))
-        self._put("capacity", self.layout.capacity)
-        self._put("max_procs", self.config.max_procs)
-        self._put("buffer_number", self.config.buffer_number & 0xFFFFFFFF)
         self._put("creator_pid", os.getpid())
-        self._put("magic", MAGIC)  # last: attachers wait for it
+        self._write_identity()  # magic last: attachers wait for it
 
     def _remove_stale_segment(self) -> None:
         """A segment with our name exists: reuse its name only if its creator is gone."""
@@ -434,7 +437,8 @@ class ShmBuffer:
 
     # ------------------------------------------------------------------ mutex
     def _lock(self, timeout: float | None = None) -> None:
-        """Take the mutex within the P-line timeout (NML-031), repairing after dead holders."""
+        """Take the mutex within the P-line timeout (NML-031), repairing after dead holders;
+        a live holder that keeps it past LOCK_HELD_REPORT_S is logged with its pid."""
         limit = self.timeout if timeout is None else timeout
         deadline = None if math.isinf(limit) else time.monotonic() + limit
         while True:
@@ -448,16 +452,45 @@ class ShmBuffer:
             except posix_ipc.BusyError:
                 if self._repair_after_dead_holder():
                     continue
+                holder = self.lock_holder()
+                if holder is not None and holder[1] >= LOCK_HELD_REPORT_S:
+                    self._report_stuck_holder(*holder)
                 if deadline is not None and time.monotonic() >= deadline:
-                    holder = self._get("holder_pid")
                     raise NmlTimeoutError(
                         f"buffer {self.name}: busy for {describe_timeout(limit)} "
-                        f"(held by pid {holder})"
+                        f"({self._describe_holder()})"
                     ) from None
                 continue
             self._put("holder_pid", _pid)
+            self._put("locked_at", time.monotonic_ns())
             self._is_locked = True
             return
+
+    def lock_holder(self) -> tuple[int, float] | None:
+        """(pid, seconds held) of the process holding the mutex, or None if it is free."""
+        self._require_open()
+        pid = self._get("holder_pid")
+        if pid <= 0:
+            return None
+        return pid, max(time.monotonic_ns() - self._get("locked_at"), 0) / 1e9
+
+    def _describe_holder(self) -> str:
+        holder = self.lock_holder()
+        if holder is None:
+            return "no holder recorded"
+        pid, held = holder
+        return f"held by pid {pid} ({_process_name(pid)}) for {held:.1f} s"
+
+    def _report_stuck_holder(self, pid: int, held: float) -> None:
+        if self._reported_holder != pid:
+            self._reported_holder = pid
+            log.warning(
+                "buffer %s: pid %d (%s) has held the lock for %.1f s: a stuck process",
+                self.name,
+                pid,
+                _process_name(pid),
+                held,
+            )
 
     def _unlock(self) -> None:
         self._put("holder_pid", 0)
@@ -556,6 +589,9 @@ class ShmBuffer:
         deadline = None if math.isinf(wait_s) else time.monotonic() + wait_s
         self._lock(wait_s)
         try:
+            problem = self._repair_if_corrupt()
+            if problem:
+                log.error("%s", problem)  # (a writer carries on: its message goes in)
             serial = 0
             if is_command:
                 serial = self._get("next_serial") + 1 & 0x7FFFFFFF or 1
@@ -567,7 +603,7 @@ class ShmBuffer:
                     self._trim_broadcast()
                 while not self._queue_has_room(len(data)):
                     if is_oldest_dropped and self._get("count"):
-                        self._queue_pop_front()
+                        self._drop_oldest()
                         continue
                     self._unlock()
                     if not self._wait_for_change(lambda: self._queue_has_room(len(data)), deadline):
@@ -586,7 +622,7 @@ class ShmBuffer:
                 self._unlock()
 
     def _latest_put(self, data: bytes) -> None:
-        seq = self._get("seq")
+        seq = self._get("seq") & ~1  # (even unless corrupt: a write is never in progress here)
         self._put("seq", seq + 1)  # odd: write in progress
         start = self.layout.data_offset
         self._mm[start : start + len(data)] = data  # type: ignore[index]
@@ -642,7 +678,7 @@ class ShmBuffer:
         if data is None or count == self._last_seen:
             return None
         self._last_seen = count
-        return decode(data, f"buffer {self.name}")
+        return self._decode_status(data)
 
     def peek(self) -> NMLmsg | None:
         """The current status (new or not) or the oldest queued message, not removed."""
@@ -650,7 +686,14 @@ class ShmBuffer:
         if self.is_queue:
             return self._queue_take(is_consuming=False)
         data, _ = self._latest_bytes()
-        return None if data is None else decode(data, f"buffer {self.name}")
+        return None if data is None else self._decode_status(data)
+
+    def _decode_status(self, data: bytes | bytearray) -> NMLmsg:
+        """A status message; one that cannot be decoded is reset (see _reset_corrupt)."""
+        try:
+            return decode(data, f"buffer {self.name}")
+        except NmlFormatError as exc:
+            raise self._reset_corrupt(str(exc)) from None
 
     def peek_into(self, msg: NMLmsg, target: memoryview | None = None) -> bool:
         """Copy the current status into ``msg`` in place, as LinuxCNC's stat.poll() copies
@@ -682,9 +725,8 @@ class ShmBuffer:
                     if not length:
                         return False
                     if header != expected or length != length_needed:
-                        decode(
-                            bytes(view[start : start + min(length, self.layout.capacity)]),  # type: ignore[index]
-                            f"buffer {self.name}",
+                        self._decode_status(
+                            bytes(view[start : start + min(length, self.layout.capacity)])  # type: ignore[index]
                         )  # raises the precise error
                         raise NmlFormatError(
                             f"buffer {self.name}: holds a {header[0]} message, not {msg.NAME}"
@@ -692,9 +734,42 @@ class ShmBuffer:
                     return True
             spins += 1
             if spins > 100:
-                time.sleep(0.0001)
-                if spins % 1000 == 0 and self._repair_after_dead_holder():
-                    continue
+                self._wait_for_status_write(spins)
+
+    def _wait_for_status_write(self, spins: int) -> None:
+        """A reader found a status write in progress for a while: sleep a little; repair
+        after a writer that died mid-write; and a write "in progress" with nobody holding
+        the mutex is a corrupt sequence counter, which is reset (NmlFormatError)."""
+        time.sleep(0.0001)
+        if spins % 100:
+            return
+        if self._repair_after_dead_holder():
+            return
+        if spins * 0.0001 >= _STUCK_WRITE_S and self._get("holder_pid") == 0:
+            raise self._reset_corrupt(
+                f"buffer {self.name}: a status write never finished (corrupt sequence counter)"
+            )
+
+    def _reset_corrupt(self, problem: str) -> NmlFormatError:
+        """A reader found ``problem``: repair the buffer (header rewritten, content
+        dropped) if it can take the mutex at once, and return the error to raise, so
+        each corruption is reported once and the next read finds a sound buffer."""
+        try:
+            self._lock(timeout=0.05)
+        except NmlTimeoutError:
+            return NmlFormatError(problem)
+        try:
+            repaired = self._repair_if_corrupt()
+            if not repaired:
+                if self.is_queue:
+                    repaired = self._discard_all()
+                else:
+                    self._put("latest_len", 0)
+                    self._put("seq", (self._get("seq") | 1) + 1)
+                    repaired = "its content was discarded until the next write"
+            return NmlFormatError(f"{problem}; {repaired}")
+        finally:
+            self._unlock()
 
     def blocking_read(self, timeout: float) -> NMLmsg | None:
         """Wait for a new message up to ``timeout`` s (< 0: forever, 0: don't wait). The whole
@@ -734,7 +809,7 @@ class ShmBuffer:
             if not seq & 1:
                 if length > capacity:
                     if _U64.unpack_from(mm, seq_at)[0] == seq:  # type: ignore[arg-type]
-                        raise NmlFormatError(
+                        raise self._reset_corrupt(
                             f"buffer {self.name}: header claims a {length}-byte message in a "
                             f"{capacity}-byte buffer (corrupt)"
                         )
@@ -744,24 +819,23 @@ class ShmBuffer:
                     return data, count
             spins += 1
             if spins > 100:
-                time.sleep(0.0001)
-                if spins % 1000 == 0 and self._repair_after_dead_holder():
-                    continue
+                self._wait_for_status_write(spins)
 
     def _queue_take(self, is_consuming: bool, lock_timeout: float | None = None) -> NMLmsg | None:
         """The next message for this connection: the oldest one, or in a broadcast queue the
-        oldest this reader has not read yet. Consuming removes it (or moves the cursor)."""
+        oldest this reader has not read yet. Consuming removes it (or moves the cursor).
+        A corrupt queue (header, record or message) is reset and reported once, by the
+        NmlFormatError of the read that found it."""
         self._lock(lock_timeout)
         try:
+            problem = self._repair_if_corrupt()
+            if problem:
+                raise NmlFormatError(problem)
             cursor = self._slot_get(self._slot, "cursor") if self.is_broadcast else -1
             try:
                 found = next((r for r in self._records() if r[2] > cursor), None)
-            except NmlFormatError as exc:
-                discarded = self._get("count")
-                self._reset_queue()
-                raise NmlFormatError(
-                    f"{exc} (corrupt); {discarded} queued message(s) discarded"
-                ) from None
+            except NmlFormatError as exc:  # the records themselves are broken
+                raise NmlFormatError(f"{exc} (corrupt); {self._discard_all()}") from None
             if found is None:
                 return None
             offset, length, sequence = found
@@ -776,7 +850,80 @@ class ShmBuffer:
                 self._wake_waiters()
         finally:
             self._unlock()
-        return decode(data, f"buffer {self.name}")
+        return decode(data, f"buffer {self.name}")  # (a bad message is consumed all the same)
+
+    def _discard_all(self) -> str:
+        """Empty a corrupt queue (mutex held); says what was lost."""
+        discarded = self._get("count")
+        self._reset_queue()
+        self._wake_waiters()  # writers waiting for room
+        return f"{discarded} queued message(s) discarded"
+
+    def _repair_if_corrupt(self) -> str | None:
+        """With the mutex held: a header that cannot be right (garbage written into the
+        segment) is rewritten from this connection's configuration and the content is
+        dropped; returns what was wrong, for the caller to report, or None."""
+        if _IDENTITY.unpack_from(self._mm, 0) != (MAGIC, LAYOUT_VERSION) or (  # type: ignore[arg-type]
+            self._layout_mismatch() is not None
+        ):
+            magic, version = _IDENTITY.unpack_from(self._mm, 0)  # type: ignore[arg-type]
+            self._write_identity()
+            if self.is_queue:
+                self._reset_queue()
+            else:
+                self._put("latest_len", 0)
+                self._put("seq", (self._get("seq") | 1) + 1)
+            return (
+                f"buffer {self.name}: segment header was corrupt (magic {magic:#x}, "
+                f"layout {version}); rewritten, its content discarded"
+            )
+        if not self.is_queue:
+            return None
+        capacity = self.layout.capacity
+        head, tail, used, count = (self._get(k) for k in ("head", "tail", "used", "count"))
+        if count == 0:
+            is_consistent = head == tail == used == 0
+        else:
+            is_consistent = (
+                head < capacity
+                and tail < capacity
+                and not head % 8
+                and not tail % 8
+                and count * RECORD.size <= used <= capacity
+            )
+        written = self._get("write_count")
+        if self.is_broadcast and self._slot >= 0 and self._slot_get(self._slot, "cursor") > written:
+            self._slot_put(self._slot, "cursor", written)
+        if is_consistent:
+            return None
+        self._reset_queue()
+        return (
+            f"buffer {self.name}: queue header was corrupt (head {head}, tail {tail}, "
+            f"used {used}, count {count}); the queue was reset"
+        )
+
+    def _write_identity(self) -> None:
+        self._put("version", LAYOUT_VERSION)
+        self._put("kind", KIND_QUEUE if self.is_queue else KIND_LATEST)
+        self._put("encoding", int(self.encoding))
+        self._put("capacity", self.layout.capacity)
+        self._put("max_procs", self.config.max_procs)
+        self._put("buffer_number", self.config.buffer_number & 0xFFFFFFFF)
+        self._put("magic", MAGIC)
+
+    def take_missed(self) -> int:
+        """Broadcast: how many messages were dropped before this reader read them (the
+        queue was full), counted since the last call."""
+        self._require_open()
+        if self._slot < 0 or not self._slot_get(self._slot, "missed"):
+            return 0  # (the common case: one read, no lock)
+        self._lock()
+        try:
+            missed = self._slot_get(self._slot, "missed")
+            self._slot_put(self._slot, "missed", 0)
+        finally:
+            self._unlock()
+        return missed
 
     def _register_broadcast_reader(self) -> None:
         """Make this connection hold every message until it has read it, starting with what
@@ -802,6 +949,19 @@ class ShmBuffer:
                 )
             yield head, length, sequence
             head = (head + RECORD.size + _align8(length)) % capacity
+
+    def _drop_oldest(self) -> None:
+        """Make room by dropping the oldest message (mutex held); in a broadcast queue,
+        each reader that had not read it yet counts it as missed (``take_missed``)."""
+        if self.is_broadcast:
+            sequence = next(self._records())[2]
+            for index in range(self.config.max_procs):
+                if (
+                    self._slot_get(index, "is_reader")
+                    and self._slot_get(index, "cursor") < sequence
+                ):
+                    self._slot_put(index, "missed", self._slot_get(index, "missed") + 1)
+        self._queue_pop_front()
 
     def _queue_pop_front(self) -> None:
         base, capacity = self.layout.data_offset, self.layout.capacity
@@ -877,15 +1037,24 @@ class ShmBuffer:
         self._require_open()
         if _IDENTITY.unpack_from(self._mm, 0) != (MAGIC, LAYOUT_VERSION):  # type: ignore[arg-type]
             magic, version = _IDENTITY.unpack_from(self._mm, 0)  # type: ignore[arg-type]
-            raise NmlFormatError(
+            problem = (
                 f"buffer {self.name}: segment header is corrupt (magic {magic:#x}, layout "
                 f"version {version}; expected {MAGIC:#x}, {LAYOUT_VERSION})"
             )
+            raise self._reset_corrupt(problem)
         if not self.process.can_read:
             raise NmlAccessError(
                 f"process {self.process.name} may not read buffer {self.name} "
                 f"(ops {self.process.ops})"
             )
+
+
+def _process_name(pid: int) -> str:
+    try:
+        with open(f"/proc/{pid}/comm", encoding="utf-8", errors="replace") as handle:
+            return handle.read().strip()
+    except OSError:
+        return "gone"
 
 
 def _try_acquire(sem: posix_ipc.Semaphore, timeout: float | None = 0) -> bool:

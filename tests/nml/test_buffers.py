@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import random
 import threading
 import time
 
@@ -239,14 +240,56 @@ def test_msgpack_buffer_round_trips_text_and_arrays(opened) -> None:
     assert reader.read() == status
 
 
-def test_overwritten_segment_header_is_a_clear_error(opened) -> None:
+def test_overwritten_segment_header_is_reported_once_and_repaired(opened) -> None:
     master, reader = opened("m", "s"), opened("r", "s")
     master.write(TEST_STAT(counter=1))
     master._mm[0:4] = b"JUNK"
-    with pytest.raises(NmlFormatError, match="buffer s: segment header is corrupt"):
+    with pytest.raises(NmlFormatError, match=r"buffer s: segment header is corrupt.*rewritten"):
         reader.peek()
-    master._mm[0:4] = (0x314C4D4E).to_bytes(4, "little")
-    assert reader.peek().counter == 1
+    assert reader.peek() is None  # sound again; what it held is gone until the next write
+    master.write(TEST_STAT(counter=2))
+    assert reader.peek().counter == 2
+
+
+def test_garbage_over_a_status_buffer_is_reported_once_then_sound(opened) -> None:
+    master, reader = opened("m", "s"), opened("r", "s")
+    master.write(TEST_STAT(counter=1))
+    size = master.layout.segment_size
+    master._mm[:size] = random.Random(1).randbytes(size)  # over everything, slots too
+    with pytest.raises(NmlFormatError):
+        reader.peek()
+    assert reader.peek() is None
+    master.write(TEST_STAT(counter=3))
+    assert reader.peek().counter == 3
+
+
+def test_a_status_write_that_never_ends_is_a_corrupt_counter(opened) -> None:
+    master, reader = opened("m", "s"), opened("r", "s")
+    master.write(TEST_STAT(counter=1))
+    master._put("seq", master._get("seq") + 1)  # odd: "in progress", but nobody writes
+    with pytest.raises(NmlFormatError, match="never finished"):
+        reader.peek()
+    master.write(TEST_STAT(counter=4))
+    assert reader.peek().counter == 4
+
+
+def test_a_corrupt_queue_header_is_reset_and_reported_once(opened) -> None:
+    master, reader = opened("m", "q"), opened("r", "q")
+    master.write(TEST_CMD(index=1))
+    master._put("head", master.layout.capacity + 8)  # out of the buffer
+    with pytest.raises(NmlFormatError, match="queue header was corrupt"):
+        reader.read()
+    assert reader.read() is None
+    master.write(TEST_CMD(index=2))
+    assert reader.read().index == 2
+
+
+def test_a_writer_repairs_a_corrupt_queue_and_its_message_goes_in(opened) -> None:
+    master, reader = opened("m", "q"), opened("r", "q")
+    master._put("count", 7)  # with nothing used: impossible
+    master.write(TEST_CMD(index=5))
+    assert reader.read().index == 5
+    assert reader.read() is None
 
 
 def test_a_signal_during_a_blocking_read_ends_the_wait_cleanly(opened) -> None:
