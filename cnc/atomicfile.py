@@ -35,6 +35,8 @@ def atomic_write_text(
             if keep_backup:
                 backup = target.with_name(target.name + ".bak")
                 _copy_for_backup(target, backup)
+        else:  # a new file gets the mode open() would give it, not mkstemp's 0600
+            os.chmod(tmp_name, 0o666 & ~_umask())
         os.replace(tmp_name, target)
     except BaseException:
         with contextlib.suppress(FileNotFoundError):
@@ -55,9 +57,28 @@ def _copy_for_backup(source: Path, backup: Path) -> None:
 
     data = source.read_bytes()
     fd, tmp_name = tempfile.mkstemp(prefix=f".{backup.name}.", dir=backup.parent)
-    with os.fdopen(fd, "wb") as tmp:
-        tmp.write(data)
-    os.replace(tmp_name, backup)
+    try:
+        with os.fdopen(fd, "wb") as tmp:
+            tmp.write(data)
+        os.chmod(tmp_name, source.stat().st_mode & 0o7777)
+        os.replace(tmp_name, backup)
+    except BaseException:  # (a full disk): no half-written backup is left behind
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(tmp_name)
+        raise
+
+
+def _umask() -> int:
+    """This process's umask, read without changing it (os.umask would, for a moment,
+    for every thread)."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as status:
+            for line in status:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError):
+        pass
+    return 0o022
 
 
 def _fsync_directory(directory: Path) -> None:
