@@ -15,6 +15,7 @@ import contextlib
 import math
 import os
 import re
+import time
 from collections.abc import Callable
 
 from . import canon as C  # noqa: N812  (C.PLANE_XY reads like CANON_PLANE_XY)
@@ -136,6 +137,7 @@ from .errors import (
     INTERP_EXECUTE_FINISH,
     INTERP_EXIT,
     INTERP_FILE_NOT_OPEN,
+    INTERP_MIN_ERROR,
     INTERP_OK,
     InterpError,
 )
@@ -353,6 +355,11 @@ class Interpreter(
         self.offset_map: dict = {}
         self.lathe_diameter_mode = False
         self.mdi_interrupt = False
+        # A caller that must stay responsive (task) sets a time.monotonic() deadline: an
+        # MDI subroutine call, which LinuxCNC runs whole within one execute(), then returns
+        # INTERP_OK with call_level > 0 at the deadline, and execute() reads on from there.
+        self.slice_deadline: float | None = None
+        self.is_mdi_call_sliced = False
         self.selected_tool = 0
         self.selected_pocket = 0
         self.parameters[5599] = 1.0
@@ -939,15 +946,25 @@ class Interpreter(
             self._planned = None
             return planned[0](planned[1])
         block = self.block
-        if block.o_name is not None or self.mdi_interrupt:
-            status = self.convert_control_functions(block)
-            if status != INTERP_OK:
-                return status
-            if self.mdi_interrupt:
-                self.mdi_interrupt = False
+        if self.is_mdi_call_sliced or block.o_name is not None or self.mdi_interrupt:
+            if self.is_mdi_call_sliced:  # the last slice ended inside an MDI call: read on
+                self.is_mdi_call_sliced = False
                 mdi_mode = True
+            else:
+                status = self.convert_control_functions(block)
+                if status != INTERP_OK:
+                    return status
+                if self.mdi_interrupt:
+                    self.mdi_interrupt = False
+                    mdi_mode = True
             while mdi_mode and self.call_level:
+                deadline = self.slice_deadline
+                if deadline is not None and time.monotonic() >= deadline:
+                    self.is_mdi_call_sliced = True
+                    return INTERP_OK
                 status = self.read()
+                if status > INTERP_MIN_ERROR:  # e.g. seeking a subroutine no file defines
+                    raise InterpError("File not open")
                 status = self.execute()
                 if status != INTERP_OK:
                     if status == INTERP_EXECUTE_FINISH:
@@ -1743,6 +1760,7 @@ class Interpreter(
         self.skipping_to_sub = None
         self.offset_map.clear()
         self.mdi_interrupt = False
+        self.is_mdi_call_sliced = False
         self.qc_reset()
 
     def _open_cached(self, filename: str) -> list[str] | None:
