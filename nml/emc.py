@@ -568,6 +568,11 @@ class EMC_JOG_CMD_MSG(RCS_CMD_MSG):
 class EMC_JOG_CONT(EMC_JOG_CMD_MSG, type_id=124):
     vel: f64
     jjogmode: i32
+    # The requester's heartbeat slot on the safety board (nml/safety.py) and its pid: motion
+    # stops the jog when that slot goes quiet (a UI killed or stuck mid-jog). lease_pid 0:
+    # no lease, the jog stops after the lease timeout unless renewed by a new EMC_JOG_CONT.
+    lease_slot: i32
+    lease_pid: i32
 
 
 class EMC_JOG_INCR(EMC_JOG_CMD_MSG, type_id=125):
@@ -971,7 +976,10 @@ class EMC_TASK_INIT(EMC_TASK_CMD_MSG, type_id=501): ...
 class EMC_TASK_HALT(EMC_TASK_CMD_MSG, type_id=502): ...
 
 
-class EMC_TASK_ABORT(EMC_TASK_CMD_MSG, type_id=503): ...
+class EMC_TASK_ABORT(EMC_TASK_CMD_MSG, type_id=503):
+    # the safety board request (nml/safety.py) this command repeats, 0 if none: task acts on
+    # whichever of the two reaches it first, and only once
+    request: u64
 
 
 class EMC_TASK_SET_MODE(EMC_TASK_CMD_MSG, type_id=504):
@@ -980,6 +988,7 @@ class EMC_TASK_SET_MODE(EMC_TASK_CMD_MSG, type_id=504):
 
 class EMC_TASK_SET_STATE(EMC_TASK_CMD_MSG, type_id=505):
     state: i32  # EMC_TASK_STATE_ENUM
+    request: u64  # with ESTOP: the safety board request it repeats (see EMC_TASK_ABORT)
 
 
 class EMC_TASK_PLAN_OPEN(EMC_TASK_CMD_MSG, type_id=506):
