@@ -2,12 +2,18 @@
 
 One loop (TASK-001..021), every [TASK]CYCLE_TIME or as soon as a command arrives:
 
+0. beat task's heartbeat and act on E-stop and abort requests of the safety board
+   (nml/safety.py), which reach task even when the command buffer is blocked, and on
+   supervised processes found lost;
 1. take the next command from ``emcCommand`` and answer it on ``emcStatus`` (EXEC, then
    DONE or ERROR with the command's serial number; refusals also on ``emcError``);
 2. plan: while a program or MDI command runs, read ahead with the interpreter, whose canon
-   queues NML messages; a queue buster (M6, M66, G38 ... INTERP_EXECUTE_FINISH) stops the
-   reading until everything queued has been carried out, then ``synch()`` reloads the
-   interpreter's world model from the machine's (TASK-008..010);
+   queues NML messages, for at most PLAN_SLICE_S a cycle, so task answers E-stop, abort
+   and status within a cycle whatever the program computes (an interpreter that runs
+   [TASK]INTERP_TIMEOUT seconds without queueing anything is stopped, naming the line);
+   a queue buster (M6, M66, G38 ... INTERP_EXECUTE_FINISH) stops the reading until
+   everything queued has been carried out, then ``synch()`` reloads the interpreter's
+   world model from the machine's (TASK-008..010);
 3. execute: send the queued messages in order, to motion (moves go straight into its
    queue) or iocontrol (after motion has finished), or carry them out here (dwell, M0/M1,
    program end, operator messages);
@@ -24,7 +30,6 @@ import time
 from collections import deque
 from collections.abc import Callable, Iterable, Sequence
 
-from cnc.atomicfile import atomic_write_text
 from cnc.ini import IniFile
 from nml import emc
 from nml.channels import (
@@ -41,6 +46,9 @@ from nml.channels import (
 )
 from nml.errors import NmlError
 from nml.message import RCS_STATUS, MessageKind
+from nml.outbox import Outbox
+from nml.safety import SafetyLink
+from nml.shmem import LOCK_HELD_REPORT_S
 from task.interp.errors import (
     INTERP_ENDFILE,
     INTERP_EXECUTE_FINISH,
@@ -48,6 +56,8 @@ from task.interp.errors import (
     INTERP_OK,
     InterpError,
 )
+from task.positions import PositionFileError, begin_run, read_positions, write_positions
+from task.runfrom import STATE_MESSAGES, TOOL_CHANGES, enclosing_block
 from task.setup import MachineSetup, load_setup
 
 log = logging.getLogger("task")
@@ -63,6 +73,11 @@ READAHEAD = 50  # messages queued ahead of motion while reading a program
 # abort quick: 100 delayed the stop by ~75 ms. Ten a task cycle outrun any program.
 MAX_MOTION_IN_FLIGHT = 10
 BUSY_POLL_S = 0.001  # how often task looks at motion while a program or MDI runs
+# The interpreter's share of a cycle: it reads on in the next cycle, after task has looked
+# at its commands and the safety board again.
+PLAN_SLICE_S = 0.005
+DEFAULT_HEARTBEAT_TIMEOUT_S = 1.0  # [TASK]HEARTBEAT_TIMEOUT
+DEFAULT_INTERP_TIMEOUT_S = 10.0  # [TASK]INTERP_TIMEOUT (0: never)
 
 
 class Run(enum.Enum):
@@ -149,9 +164,26 @@ class Task:
         self.checked_motion_serial = 0
         self.file = ""
         self.system_command: subprocess.Popen[bytes] | None = None
+        self.is_homing_required = False  # after an unclean shutdown, even with NO_FORCE_HOMING
         self.first_line = 0  # run from line: the lines before it are only interpreted
+        self.is_skipping = False  # ... and these are being read
+        self.skipped_state: dict[type, emc.NMLmsg] = {}  # the state the skipped lines set
+        self.skipped_tool_change = 0  # the last skipped line that changed the tool
+        self.furthest_line = 0  # the furthest line of the program read so far
         self.is_stepping = False  # AUTO_STEP: one line at a time
-        self.step_lines = 0
+        self.step_line: int | None = None  # the line this step carries out (None: the next)
+        self.interp_timeout = ini.get_float("TASK", "INTERP_TIMEOUT", DEFAULT_INTERP_TIMEOUT_S)
+        self.idle_reading_s = 0.0  # the interpreter's time since it last queued anything
+        self.safety = SafetyLink.open(
+            "task", ini.get_float("TASK", "HEARTBEAT_TIMEOUT", DEFAULT_HEARTBEAT_TIMEOUT_S)
+        )
+        # the newest safety board requests task has acted on (by the board or a command)
+        self.estop_handled = 0
+        self.abort_handled = 0
+        self.outbox = Outbox(nml[EMC_ERROR])  # operator messages: never wait for a reader
+        self.stuck_command_writer = 0  # the pid last reported holding emcCommand's lock
+        self.bad_buffer_quiet_until = 0.0
+        self.bad_buffer_reports = 0
         self.handlers: dict[type, Callable[[emc.NMLmsg], str | bool | None]] = {
             emc.EMC_TASK_SET_STATE: self._set_state,
             emc.EMC_TASK_SET_MODE: self._set_mode,
@@ -183,17 +215,22 @@ class Task:
         self.publish()
 
     def _saved_positions(self) -> list[emc.NMLmsg]:
-        """[TRAJ]POSITION_FILE: one joint position per line (LinuxCNC's format)."""
+        """[TRAJ]POSITION_FILE (task/positions.py): where the joints were at the last clean
+        shutdown; after an unclean one, nothing, and homing is required."""
         path = self.setup.position_file
         if not path:
             return []
-        try:
-            with open(path, encoding="utf-8") as handle:
-                values = [float(line) for line in handle.read().split()]
-        except FileNotFoundError:
+        if not begin_run(path):
+            self.is_homing_required = True
+            self.operator_error(
+                f"{path}: the last run ended without saving the joint positions (killed or "
+                "power lost): they are not restored; home the machine"
+            )
             return []
-        except (OSError, ValueError) as exc:
-            self.operator_error(f"{path}: cannot read saved positions ({exc}); ignored")
+        try:
+            values = read_positions(path)
+        except PositionFileError as exc:
+            self.operator_error(f"{exc}; ignored")
             return []
         return [
             emc.EMC_JOINT_SET_MOTOR_OFFSET(joint=index, offset=-value)
@@ -204,9 +241,11 @@ class Task:
         """One pass of the loop: waits for a command at most CYCLE_TIME, or one servo
         period while something runs, so completions are seen (and answered) at once."""
         timeout = self.setup.cycle_time if self.run is Run.IDLE else BUSY_POLL_S
+        self.take_safety_requests()
         cmd = self._next_command(timeout)
         self.refresh()
         if cmd is not None:
+            self.take_safety_requests()  # (a request older than the command goes first)
             self.handle(cmd)
         try:
             self._watch_estop()
@@ -216,14 +255,55 @@ class Task:
         except Exception as exc:  # a bug: what runs stops, task goes on (see _internal_error)
             self.operator_error(self._internal_error("running the program", exc))
             self._abort()
+        self.outbox.flush()
         self.publish()
 
+    def take_safety_requests(self) -> None:
+        """Beat task's heartbeat; act on new E-stop and abort requests of the safety board
+        and report the processes found lost (their E-stop is requested already)."""
+        if self.safety is None:
+            return
+        tick = self.safety.tick()
+        for lost in tick.lost:
+            self.operator_error(f"E-stop: {lost.reason}")
+        if tick.estop is not None and tick.estop.stamp > self.estop_handled:
+            self.estop_handled = tick.estop.stamp
+            self._estop(is_braking=tick.estop.is_braking)
+        if tick.abort is not None and tick.abort.stamp > self.abort_handled:
+            self.abort_handled = tick.abort.stamp
+            self._abort_command(emc.EMC_TASK_ABORT())
+
     def _next_command(self, timeout: float) -> emc.NMLmsg | None:
+        channel = self.nml[EMC_COMMAND]
         try:
-            return self.nml[EMC_COMMAND].blocking_read(timeout)
+            return channel.blocking_read(timeout)
         except NmlError as exc:
-            self.operator_error(f"bad command message: {exc}")
+            self._report_bad_buffer(f"bad command message: {exc}")
             return None
+        finally:
+            holder = channel.lock_holder()
+            if holder is not None and holder[1] >= LOCK_HELD_REPORT_S:
+                if holder[0] != self.stuck_command_writer:
+                    self.stuck_command_writer = holder[0]
+                    self.operator_error(
+                        f"{channel.name}: process {holder[0]} has held the command lock for "
+                        f"{holder[1]:.1f} s (stuck?): other user interfaces cannot send "
+                        "commands; E-stop and abort still work"
+                    )
+            else:
+                self.stuck_command_writer = 0
+
+    def _report_bad_buffer(self, text: str) -> None:
+        """Corrupt messages or buffers: said at most once a second, the rest counted."""
+        now = time.monotonic()
+        if now < self.bad_buffer_quiet_until:
+            self.bad_buffer_reports += 1
+            return
+        if self.bad_buffer_reports:
+            text += f" ({self.bad_buffer_reports} more such errors in the last second)"
+        self.bad_buffer_reports = 0
+        self.bad_buffer_quiet_until = now + 1.0
+        self.operator_error(text)
 
     # ================================================================ commands
     def handle(self, cmd: emc.NMLmsg) -> None:
@@ -284,17 +364,25 @@ class Task:
     def _set_state(self, cmd: emc.EMC_TASK_SET_STATE) -> str | None:
         target = cmd.state
         if target == STATE.ESTOP:
-            self._abort()
-            self._send_motion(emc.EMC_TRAJ_DISABLE())
-            self._send_io(emc.EMC_AUX_ESTOP_ON(), is_waiting=True)
-            self.state = STATE.ESTOP
+            if cmd.request:  # the E-stop the sender also put on the safety board
+                if cmd.request <= self.estop_handled:
+                    return None  # done already, from the board
+                self.estop_handled = cmd.request
+            self._estop(is_braking=False)
         elif target == STATE.ESTOP_RESET:
+            lost = self.safety.board.lost_names() if self.safety is not None else []
+            if lost:
+                return (
+                    f"cannot reset E-stop: {', '.join(lost)} was lost (its safety inputs "
+                    "are not read); restart the machine"
+                )
             problem = self._send_io(emc.EMC_AUX_ESTOP_RESET(), is_waiting=True)
             problem = problem or self._send_io(emc.EMC_AUX_ESTOP_OFF(), is_waiting=True)
             if problem:
                 return problem
             if self.stat.io.aux.estop:
                 return "cannot reset E-stop: the E-stop chain (iocontrol.0.emc-enable-in) is open"
+            self._abort_all()
             self._send_motion(emc.EMC_TRAJ_DISABLE())
             self.state = STATE.ESTOP_RESET
         elif target == STATE.ON:
@@ -307,12 +395,24 @@ class Task:
         elif target == STATE.OFF:
             if self.state == STATE.ESTOP:
                 return "cannot turn the machine off while in E-stop (reset it first)"
-            self._abort()
+            self._abort_all()
             self._send_motion(emc.EMC_TRAJ_DISABLE(), is_waiting=True)
             self.state = STATE.OFF
         else:
             return f"unknown machine state {target}"
         return None
+
+    def _estop(self, is_braking: bool) -> None:
+        """E-stop, asked for by a command, the E-stop chain or the safety board: stop
+        everything, iocontrol's outputs safe, motion off at once. A braking E-stop (a
+        process was lost) leaves motion on: it brakes along its path, goes off by itself
+        and then asks for the immediate E-stop, which turns iocontrol's outputs off. Never
+        waits for an answer: iocontrol or motion may be the process that is gone."""
+        self._abort_all()
+        if not is_braking:
+            self._send_motion(emc.EMC_TRAJ_DISABLE())
+            self._send_io(emc.EMC_AUX_ESTOP_ON())
+        self.state = STATE.ESTOP
 
     def _set_mode(self, cmd: emc.EMC_TASK_SET_MODE) -> str | None:
         mode = cmd.mode
@@ -344,9 +444,10 @@ class Task:
         if traj.mode == emc.EMC_TRAJ_MODE_ENUM.COORD:
             return None
         joints = self.stat.motion.joint
-        if self.setup.is_homing_forced and not all(
-            joints[i].homed for i in range(len(self.setup.joints))
-        ):
+        is_forced = self.setup.is_homing_forced or self.is_homing_required
+        if is_forced and not all(joints[i].homed for i in range(len(self.setup.joints))):
+            if self.is_homing_required:
+                return "all joints must be homed first (the last run did not save positions)"
             return "all joints must be homed first ([TRAJ]NO_FORCE_HOMING is not set)"
         return self._send_motion(
             emc.EMC_TRAJ_SET_MODE(mode=emc.EMC_TRAJ_MODE_ENUM.COORD), is_waiting=True
@@ -411,6 +512,13 @@ class Task:
             return problem
         self.interp.close()
         self.interp.open(self.file)
+        if cmd.line > 1:
+            inside = enclosing_block(self.interp.file_lines or [], cmd.line)
+            if inside:
+                return (
+                    f"cannot run from line {cmd.line}: it is inside {inside}, whose state "
+                    "cannot be known without running it; start at the block's first line"
+                )
         self.canon.set_status(self.stat)
         self.interp.synch()
         self.checked_motion_serial = self.last_motion_serial
@@ -419,6 +527,10 @@ class Task:
         self.is_reading_done = False
         self.is_waiting_for_synch = False
         self.first_line = cmd.line
+        self.is_skipping = cmd.line > 1
+        self.skipped_state.clear()
+        self.skipped_tool_change = 0
+        self.furthest_line = 0
         self.is_stepping = False
         return None
 
@@ -436,7 +548,10 @@ class Task:
         return self._send_motion(emc.EMC_TRAJ_RESUME())
 
     def _step(self, cmd: emc.NMLmsg) -> str | None:
-        """AUTO_STEP: carry out the next line, then pause (from idle: start the program)."""
+        """AUTO_STEP: carry out the next line, then pause (from idle: start the program).
+        Paused with moves left in motion's queue (a feed hold in the middle of a line),
+        motion runs the next of them to its end and pauses again, as LinuxCNC's task
+        does; then the lines still in task's queue go out one at a time (_may_step)."""
         if self.run is Run.IDLE:
             problem = self._run_program(emc.EMC_TASK_PLAN_RUN(line=0))
             if problem:
@@ -444,11 +559,25 @@ class Task:
         elif self.run is not Run.PROGRAM:
             return "step needs a program (AUTO mode)"
         self.is_stepping = True
-        self.step_lines = 1
+        if self.is_paused and self.stat.motion.traj.queue > 0:
+            return self._send_motion(emc.EMC_TRAJ_STEP())
+        self.step_line = None
         if self.is_paused:
             self.is_paused = False
             return self._send_motion(emc.EMC_TRAJ_RESUME())
         return None
+
+    def _may_step(self, line: int) -> bool:
+        """While stepping: may a message of ``line`` go out now? Those of the line being
+        stepped may; the first of the next line ends the step, once the line is done."""
+        if self.step_line is None:
+            self.step_line = line
+        if line == self.step_line:
+            return True
+        if self._is_everything_done():
+            self.is_paused = True
+            self.step_line = None
+        return False
 
     def _plan_init(self, _cmd: emc.NMLmsg) -> str | None:
         if self.run is not Run.IDLE:
@@ -472,8 +601,12 @@ class Task:
         self._write_error_channel(cmd)
         return None
 
-    def _abort_command(self, _cmd: emc.NMLmsg) -> None:
-        self._abort()
+    def _abort_command(self, cmd: emc.EMC_TASK_ABORT) -> None:
+        if cmd.request:  # the abort the sender also put on the safety board
+            if cmd.request <= self.abort_handled:
+                return  # done already, from the board
+            self.abort_handled = cmd.request
+        self._abort_all()
         self.operator_text("task: aborted")  # an abort is always reported (TASK-019)
         on_abort = self.ini.find("RS274NGC", "ON_ABORT_COMMAND")
         if on_abort and self.state == STATE.ON:
@@ -482,8 +615,17 @@ class Task:
             if outcome is not True:
                 self.operator_error(f"ON_ABORT_COMMAND: {outcome}")
 
+    def _abort_all(self) -> None:
+        """Abort as LinuxCNC's task does on STOP, E-stop, machine off and run-time errors:
+        as ``_abort``, and every spindle stops and iocontrol turns the coolant off and
+        drops any tool-change handshake (emcIoAbort, emcSpindleAbort)."""
+        self._abort()
+        for spindle in range(max(self.stat.motion.traj.spindles, 1)):
+            self._send_motion(emc.EMC_SPINDLE_OFF(spindle=spindle))
+        self._send_io(emc.EMC_TOOL_ABORT())
+
     def _abort(self) -> None:
-        """Stop motion along the path, cancel tool changes, forget what was queued."""
+        """Stop motion along the path, forget what was queued (LinuxCNC's emcTaskAbort)."""
         self._send_motion(emc.EMC_TRAJ_ABORT())
         if self.stat.io.status == RCS_STATUS.EXEC:
             self._send_io(emc.EMC_TOOL_ABORT())
@@ -494,19 +636,18 @@ class Task:
         self.run = Run.IDLE
         self.is_paused = False
         self.is_stepping = False
+        self.step_line = None
         self.is_reading_done = True
         self.is_waiting_for_synch = False
         self.delay_until = 0.0
         self.pending_serial = 0
+        self.idle_reading_s = 0.0
 
     # ================================================================ planning
     def _plan(self) -> None:
-        """Read ahead while a program or MDI command runs (TASK-006..010)."""
+        """Read ahead while a program or MDI command runs (TASK-006..010), for at most
+        PLAN_SLICE_S: the rest is read in the next cycles."""
         if self.run is Run.IDLE or self.is_paused:
-            return
-        if self.is_stepping and not self.step_lines:
-            if not self.queue and self._is_everything_done():
-                self.is_paused = True  # the stepped line is done: wait for the next step
             return
         if self.is_reading_done:
             return
@@ -516,7 +657,22 @@ class Task:
             self.canon.set_status(self.stat)
             self.interp.synch()
             self.is_waiting_for_synch = False
+        started = time.monotonic()
+        queued, furthest = len(self.queue), self.furthest_line
+        self.interp.slice_deadline = started + PLAN_SLICE_S
+        try:
+            self._read_ahead()
+        finally:
+            self.interp.slice_deadline = None
+        if self.run is not Run.IDLE:
+            has_progressed = len(self.queue) != queued or self.furthest_line != furthest
+            self._check_interp_time(0.0 if has_progressed else time.monotonic() - started)
+
+    def _read_ahead(self) -> None:
+        deadline = self.interp.slice_deadline
         while len(self.queue) < READAHEAD and not self.is_reading_done:
+            if time.monotonic() >= deadline:
+                return  # on in the next cycle
             try:
                 if self.run is Run.MDI:
                     status = self.interp.execute(None) if self.interp.call_level else INTERP_EXIT
@@ -527,13 +683,14 @@ class Task:
                     if status == INTERP_ENDFILE:
                         self.is_reading_done = True
                         break
-                    is_skipped = self.interp.sequence_number < self.first_line
-                    self.queue.line = self.interp.sequence_number
+                    line = self.interp.sequence_number
+                    self.furthest_line = max(self.furthest_line, line)
+                    if self.is_skipping and not self.interp.call_level and line >= self.first_line:
+                        self._end_skipping()  # (the line before it was in a subroutine)
+                    self.queue.line = line
                     status = self.interp.execute()
-                    if self.is_stepping and not is_skipped and self.queue:
-                        self.step_lines = 0  # one line that does something, per step
-                    if is_skipped:  # run from line: interpreted for its state, not carried out
-                        self.queue.clear()
+                    if self.is_skipping:  # run from line: interpreted for its state only
+                        self._keep_state_of_skipped_line()
                         status = INTERP_OK if status == INTERP_EXECUTE_FINISH else status
                     if status == INTERP_EXIT:
                         self.is_reading_done = True
@@ -543,8 +700,56 @@ class Task:
             if status == INTERP_EXECUTE_FINISH:
                 self.is_waiting_for_synch = True
                 return
-            if self.is_stepping and not self.step_lines:
-                return
+
+    def _check_interp_time(self, spent: float) -> None:
+        """[TASK]INTERP_TIMEOUT: an interpreter that neither queues anything nor reaches a
+        line it had not reached before for that long is in an endless loop: stop it."""
+        if not spent:
+            self.idle_reading_s = 0.0
+            return
+        self.idle_reading_s += spent
+        if self.interp_timeout and self.idle_reading_s > self.interp_timeout:
+            self._program_error(
+                f"the interpreter ran {self.idle_reading_s:.1f} s without producing motion "
+                f"(an endless loop?); stopped ([TASK]INTERP_TIMEOUT = {self.interp_timeout:g})"
+            )
+
+    # ---------------------------------------------------------------- run from line
+    def _keep_state_of_skipped_line(self) -> None:
+        """Run from line: what a skipped line queued is not carried out, but the state it
+        set is kept (the last of each kind), so that motion and the interpreter agree on
+        offsets and settings when the run starts. Its tool changes are noted (the
+        machine keeps the tool it holds); its errors are reported, as LinuxCNC does."""
+        for msg in self.queue:
+            if isinstance(msg, STATE_MESSAGES):
+                self.skipped_state[type(msg)] = msg
+            elif isinstance(msg, TOOL_CHANGES):
+                self.skipped_tool_change = self.interp.sequence_number
+            elif isinstance(msg, emc.EMC_OPERATOR_ERROR):
+                self._write_error_channel(msg)
+        self.queue.clear()
+        if not self.interp.call_level and self.interp.sequence_number + 1 >= self.first_line:
+            self._end_skipping()  # the next line is the start line
+
+    def _end_skipping(self) -> None:
+        """The start line is next: the interpreter's world model becomes the machine's
+        again (as LinuxCNC synchs there), and the state the skipped lines set goes out
+        before the start line's own messages. A tool changed by the skipped lines that is
+        not the one in the spindle stops the run: its offsets would not be the tool's."""
+        self.is_skipping = False
+        tool = int(self.interp.parameters[5400])
+        in_spindle = self.stat.io.tool.toolInSpindle
+        if self.skipped_tool_change and tool != in_spindle:
+            raise InterpError(
+                f"cannot run from line {self.first_line}: line {self.skipped_tool_change} "
+                f"before it changes to tool {tool}, and the spindle holds tool {in_spindle}; "
+                f"load tool {tool} first, or start at line {self.skipped_tool_change} or before"
+            )
+        for msg in self.skipped_state.values():
+            self.queue.append(msg)
+        self.skipped_state.clear()
+        self.canon.set_status(self.stat)
+        self.interp.synch()
 
     def _program_error(self, text: str) -> None:
         line = getattr(self.interp, "sequence_number", 0)
@@ -564,7 +769,10 @@ class Task:
             if now < self.delay_until:
                 return
             msg = self.queue[0]
-            self.current_line = self.queue.head_line()
+            line = self.queue.head_line()
+            if self.is_stepping and not self._may_step(line):
+                return
+            self.current_line = line
             if isinstance(msg, emc.EMC_TRAJ_DELAY):
                 if not self._is_motion_done():
                     return
@@ -709,7 +917,14 @@ class Task:
         channel = self.nml[buffer]
         deadline = time.monotonic() + timeout
         while True:
-            stat = channel.peek()
+            if self.safety is not None:  # alive while waiting; an E-stop ends the wait
+                self.safety.heartbeat.beat()
+                if self.safety.board.estop_stamp() != self.safety.watcher.estop_seen:
+                    return "E-stop was requested"
+            try:
+                stat = channel.peek()
+            except NmlError:
+                stat = None  # (reported by refresh; the answer may still come)
             if (
                 stat is not None
                 and stat.echo_serial_number >= serial
@@ -732,21 +947,26 @@ class Task:
     def _watch_estop(self) -> None:
         """The E-stop chain: iocontrol reports emc-enable-in dropped (IO-004)."""
         if self.state != STATE.ESTOP and self.stat.io.aux.estop:
-            self._abort()
+            self._abort_all()
             self._send_motion(emc.EMC_TRAJ_DISABLE())
             self.state = STATE.ESTOP
             self.operator_error("E-stop: the E-stop chain opened (iocontrol.0.emc-enable-in)")
 
     def refresh(self) -> None:
-        """Take motion's and iocontrol's latest status into EMC_STAT."""
-        motion = self.nml[MOTION_STATUS].peek()
+        """Take motion's and iocontrol's latest status into EMC_STAT (a corrupt one is
+        reported and the last good one kept)."""
+        try:
+            motion = self.nml[MOTION_STATUS].peek()
+            io = self.nml[TOOL_STATUS].peek()
+        except NmlError as exc:
+            self._report_bad_buffer(str(exc))
+            return
         if motion is not None:
             self.stat.motion = motion
             # the units are task's (LinuxCNC's emcTrajUpdate fills them in the same way)
             traj = self.stat.motion.traj
             traj.linearUnits = self.setup.units_per_mm
             traj.angularUnits = self.setup.angular_units
-        io = self.nml[TOOL_STATUS].peek()
         if io is not None:
             self.stat.io = io
 
@@ -801,25 +1021,46 @@ class Task:
         self._write_error_channel(emc.EMC_OPERATOR_TEXT(text=emc.fit_text(text)))
 
     def _write_error_channel(self, msg: emc.NMLmsg) -> None:
-        try:  # (never waits: with nobody reading, the oldest messages go)
-            self.nml[EMC_ERROR].write(msg, is_oldest_dropped=True)
-        except NmlError as exc:
-            log.error("cannot write to the error channel: %s", exc)
+        self.outbox.post(msg)
 
     # ================================================================ shutdown
     def shutdown(self) -> None:
-        """Save what must survive a restart: parameters, positions (atomically)."""
+        """Stop motion, then save what must survive a restart: parameters and the joint
+        positions motion reports at rest (atomically). A failed save is told to the
+        operator, on the error channel."""
+        self._stop_for_shutdown()
         try:
             self.interp.exit()
+            if getattr(self.interp, "save_error", None) is not None:
+                self.operator_error(f"cannot save the parameters: {self.interp.save_error}")
         except InterpError as exc:
-            log.error("saving parameters failed: %s", exc)
+            self.operator_error(f"cannot save the parameters: {exc}")
         if self.setup.position_file:
             joints = self.stat.motion.joint  # all 16, as LinuxCNC writes them
-            text = "".join(f"{joints[i].output:.17f}\n" for i in range(len(joints)))
             try:
-                atomic_write_text(self.setup.position_file, text)
+                write_positions(self.setup.position_file, [j.output for j in joints])
             except OSError as exc:
-                log.error("cannot write %s: %s", self.setup.position_file, exc)
+                self.operator_error(
+                    f"cannot save the joint positions to {self.setup.position_file}: {exc}"
+                )
+        self.outbox.flush()
+        if self.safety is not None:
+            self.safety.close()
+
+    def _stop_for_shutdown(self, timeout: float = 5.0) -> None:
+        """Abort and wait (at most ``timeout``) until motion is at rest, so the positions
+        saved are where the machine stands, not where it was passing."""
+        self._abort()
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            if self.safety is not None:
+                self.safety.heartbeat.beat()
+            self.refresh()
+            motion = self.stat.motion
+            if motion.traj.inpos and motion.traj.queue == 0 and not motion.traj.current_vel:
+                return
+            time.sleep(0.005)
+        log.error("motion did not come to rest within %g s of the shutdown", timeout)
 
 
 # Motion commands an operator gives in manual mode, with the machine on

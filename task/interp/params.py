@@ -159,6 +159,7 @@ class ParamsMixin:
             pars[i] = 0.0
 
     def save_parameters(self, filename: str) -> None:
+        self.save_error: OSError | None = None
         pars = self.parameters
         try:
             with open(filename, encoding="latin-1") as handle:
@@ -190,8 +191,9 @@ class ParamsMixin:
         existed = os.path.exists(filename)
         try:
             atomic_write_text(filename, "".join(out), keep_backup=True)
-        except OSError:
-            return  # rs274 says nothing when it cannot write the file
+        except OSError as exc:
+            self.save_error = exc  # rs274 says nothing; task tells the operator
+            return
         if not existed:
             # LinuxCNC links the old file to .bak before the rename and reports the failure
             self.report("link (updating variable file): No such file or directory\n")
