@@ -31,7 +31,6 @@ from __future__ import annotations
 import contextlib
 import mmap
 import os
-import struct
 import time
 from dataclasses import dataclass
 
@@ -40,28 +39,30 @@ import posix_ipc
 from nml.ipcnames import ipc_name
 
 MAGIC = 0x46415331  # "1SAF"
+# A braking E-stop that has not brought motion to rest by then turns motion off anyway.
+BRAKE_TIMEOUT_S = 5.0
 VERSION = 1
 NUM_SLOTS = 32
 REASON_BYTES = 112
 NAME_BYTES = 32
 
-# header: magic, version, creator pid, is_shutting_down
-_HEADER = struct.Struct("<IIqI")
+# Byte offsets. Every field is read and written whole through a typed view of the segment
+# (one aligned load or store): struct.pack_into first zeroes what it writes, and a reader
+# without a lock would see the zeros (a beat of 0: a process taken for dead).
+# header: magic u32, version u32, creator pid i64, is_shutting_down u32
+_MAGIC_AT, _VERSION_AT, _CREATOR_AT, _SHUTDOWN_AT = 0, 4, 8, 16
 HEADER_SIZE = 64
-# a request: stamp (ns), pid, is_braking, reason (UTF-8, NUL padded)
-_REQUEST = struct.Struct(f"<QiI{REASON_BYTES}s")
+# a request: stamp u64 (ns, written last), pid i32, is_braking u32, reason (UTF-8, NUL padded)
+_STAMP_AT, _PID_AT, _BRAKING_AT, _REASON_AT = 0, 8, 12, 16
 REQUEST_SIZE = 128
 ESTOP_AT = HEADER_SIZE
 ABORT_AT = ESTOP_AT + REQUEST_SIZE
-# a slot: pid, state, timeout (ns), beat (ns), is_supervised, name
-_SLOT = struct.Struct(f"<iIQQI4x{NAME_BYTES}s")
+# a slot: pid i32, state u32 (written last), timeout u64 (ns), beat u64 (ns),
+# is_supervised u32, name (UTF-8, NUL padded)
+_SLOT_PID_AT, _STATE_AT, _TIMEOUT_AT, _BEAT_AT, _SUPERVISED_AT, _NAME_AT = 0, 4, 8, 16, 24, 32
 SLOT_SIZE = 64
 SLOTS_AT = ABORT_AT + REQUEST_SIZE
 SEGMENT_SIZE = SLOTS_AT + NUM_SLOTS * SLOT_SIZE
-_U64 = struct.Struct("<Q")
-_STAMP_AT = 0  # offset of a request's stamp, and of a slot's beat
-_BEAT_AT = 16
-_STATE_AT = 4
 
 FREE, ALIVE, EXITED, LOST = 0, 1, 2, 3
 
@@ -90,12 +91,62 @@ class LostProcess:
     reason: str
 
 
+@dataclass(frozen=True)
+class _SlotView:
+    pid: int
+    state: int
+    timeout: int
+    beat: int
+    is_supervised: bool
+    name: str
+
+
 class SafetyBoard:
     """One process's view of the machine's safety board."""
 
     def __init__(self, mm: mmap.mmap, is_owner: bool) -> None:
         self._mm = mm
         self.is_owner = is_owner
+        view = memoryview(mm)
+        self._u64, self._i32, self._u32 = view.cast("Q"), view.cast("i"), view.cast("I")
+        view.release()
+
+    # ------------------------------------------------------------------ typed fields
+    def _get_u64(self, at: int) -> int:
+        return self._u64[at >> 3]
+
+    def _put_u64(self, at: int, value: int) -> None:
+        self._u64[at >> 3] = value
+
+    def _get_u32(self, at: int) -> int:
+        return self._u32[at >> 2]
+
+    def _put_u32(self, at: int, value: int) -> None:
+        self._u32[at >> 2] = value
+
+    def _get_i32(self, at: int) -> int:
+        return self._i32[at >> 2]
+
+    def _put_i32(self, at: int, value: int) -> None:
+        self._i32[at >> 2] = value
+
+    def _put_text(self, at: int, size: int, text: str) -> None:
+        raw = text.encode("utf-8")[:size]
+        self._mm[at : at + size] = raw + bytes(size - len(raw))
+
+    def _get_text(self, at: int, size: int) -> str:
+        return self._mm[at : at + size].rstrip(b"\0").decode("utf-8", errors="replace")
+
+    def _slot(self, index: int) -> _SlotView:
+        at = _slot_at(index)
+        return _SlotView(
+            self._get_i32(at + _SLOT_PID_AT),
+            self._get_u32(at + _STATE_AT),
+            self._get_u64(at + _TIMEOUT_AT),
+            self._get_u64(at + _BEAT_AT),
+            bool(self._get_u32(at + _SUPERVISED_AT)),
+            self._get_text(at + _NAME_AT, NAME_BYTES),
+        )
 
     # ------------------------------------------------------------------ lifecycle
     @classmethod
@@ -109,9 +160,11 @@ class SafetyBoard:
             mm = mmap.mmap(shm.fd, SEGMENT_SIZE)
         finally:
             shm.close_fd()
-        _HEADER.pack_into(mm, 0, 0, VERSION, os.getpid(), 0)
-        struct.pack_into("<I", mm, 0, MAGIC)  # last: attachers check it
-        return cls(mm, is_owner=True)
+        board = cls(mm, is_owner=True)
+        board._put_u32(_VERSION_AT, VERSION)
+        board._put_u64(_CREATOR_AT, os.getpid())
+        board._put_u32(_MAGIC_AT, MAGIC)  # last: attachers check it
+        return board
 
     @classmethod
     def attach(cls, instance: str | None = None) -> SafetyBoard | None:
@@ -127,14 +180,22 @@ class SafetyBoard:
             mm = mmap.mmap(shm.fd, SEGMENT_SIZE)
         finally:
             shm.close_fd()
-        if _HEADER.unpack_from(mm, 0)[:2] != (MAGIC, VERSION):
-            mm.close()
+        board = cls(mm, is_owner=False)
+        if (board._get_u32(_MAGIC_AT), board._get_u32(_VERSION_AT)) != (MAGIC, VERSION):
+            board.close()
             return None
-        return cls(mm, is_owner=False)
+        return board
 
     def close(self) -> None:
-        if self._mm is not None and not self._mm.closed:
-            self._mm.close()
+        if self._mm.closed:
+            return
+        for view in (self._u64, self._i32, self._u32):
+            view.release()
+        self._mm.close()
+
+    @property
+    def is_closed(self) -> bool:
+        return self._mm.closed
 
     def unlink(self, instance: str | None = None) -> None:
         self.close()
@@ -144,11 +205,10 @@ class SafetyBoard:
     @property
     def is_shutting_down(self) -> bool:
         """The launcher is stopping the machine: processes leaving are not lost."""
-        return bool(_HEADER.unpack_from(self._mm, 0)[3])
+        return bool(self._get_u32(_SHUTDOWN_AT))
 
     def begin_shutdown(self) -> None:
-        magic, version, creator, _ = _HEADER.unpack_from(self._mm, 0)
-        _HEADER.pack_into(self._mm, 0, magic, version, creator, 1)
+        self._put_u32(_SHUTDOWN_AT, 1)
 
     # ------------------------------------------------------------------ requests
     def request_estop(self, reason: str, *, is_braking: bool = False) -> int:
@@ -161,17 +221,18 @@ class SafetyBoard:
 
     def _request(self, at: int, reason: str, is_braking: bool) -> int:
         stamp = now_ns()
-        text = reason.encode("utf-8")[:REASON_BYTES]
-        _REQUEST.pack_into(self._mm, at, 0, os.getpid(), int(is_braking), text)
-        _U64.pack_into(self._mm, at + _STAMP_AT, stamp)  # last: the request counts from now
+        self._put_text(at + _REASON_AT, REASON_BYTES, reason)
+        self._put_i32(at + _PID_AT, os.getpid())
+        self._put_u32(at + _BRAKING_AT, int(is_braking))
+        self._put_u64(at + _STAMP_AT, stamp)  # last: the request counts from now
         return stamp
 
     def estop_stamp(self) -> int:
         """The last E-stop request's stamp: cheap enough for every servo period."""
-        return _U64.unpack_from(self._mm, ESTOP_AT)[0]
+        return self._u64[(ESTOP_AT + _STAMP_AT) >> 3]
 
     def abort_stamp(self) -> int:
-        return _U64.unpack_from(self._mm, ABORT_AT)[0]
+        return self._u64[(ABORT_AT + _STAMP_AT) >> 3]
 
     def estop_request(self) -> Request:
         return self._read_request(ESTOP_AT)
@@ -180,8 +241,12 @@ class SafetyBoard:
         return self._read_request(ABORT_AT)
 
     def _read_request(self, at: int) -> Request:
-        stamp, pid, is_braking, text = _REQUEST.unpack_from(self._mm, at)
-        return Request(stamp, pid, _text(text), bool(is_braking))
+        return Request(
+            self._get_u64(at + _STAMP_AT),
+            self._get_i32(at + _PID_AT),
+            self._get_text(at + _REASON_AT, REASON_BYTES),
+            bool(self._get_u32(at + _BRAKING_AT)),
+        )
 
     def watcher(self) -> RequestWatcher:
         """Something that reports each new request once, starting from now."""
@@ -191,107 +256,110 @@ class SafetyBoard:
     def register(self, name: str, timeout_s: float, *, is_supervised: bool) -> Heartbeat:
         """Claim a slot for this process (the lost slot of the same name, if any: the
         process is back) and beat it once. Raises RuntimeError when all are taken."""
-        pid = os.getpid()
-        wanted = name.encode("utf-8")[:NAME_BYTES]
-        free = None
+        chosen = None
         for index in range(NUM_SLOTS):
-            at = _slot_at(index)
-            slot_pid, state, _, _, is_supervised, slot_name = _SLOT.unpack_from(self._mm, at)
-            if slot_name.rstrip(b"\0") == wanted and state in (LOST, EXITED):
-                free = index  # back after being lost: take its place, E-stop may be reset
+            slot = self._slot(index)
+            if slot.name == name and slot.state in (LOST, EXITED):
+                chosen = index  # back after being lost: take its place, E-stop may be reset
                 break
             # (a supervised slot of a dead process stays until someone finds it lost)
-            is_reusable = state == FREE or (not is_supervised and not _is_alive(slot_pid))
-            if free is None and is_reusable:
-                free = index
-        if free is None:
+            is_reusable = slot.state == FREE or (not slot.is_supervised and not _is_alive(slot.pid))
+            if chosen is None and is_reusable:
+                chosen = index
+        if chosen is None:
             raise RuntimeError(f"safety board: all {NUM_SLOTS} heartbeat slots are taken")
-        timeout_ns = max(int(timeout_s * 1e9), 1)
-        _SLOT.pack_into(
-            self._mm, _slot_at(free), pid, ALIVE, timeout_ns, now_ns(), int(is_supervised), wanted
-        )
-        return Heartbeat(self, free, pid, name)
+        at, pid = _slot_at(chosen), os.getpid()
+        self._put_text(at + _NAME_AT, NAME_BYTES, name)
+        self._put_u64(at + _TIMEOUT_AT, max(int(timeout_s * 1e9), 1))
+        self._put_u32(at + _SUPERVISED_AT, int(is_supervised))
+        self._put_u64(at + _BEAT_AT, now_ns())
+        self._put_i32(at + _SLOT_PID_AT, pid)
+        self._put_u32(at + _STATE_AT, ALIVE)  # last: from now on it is looked at
+        return Heartbeat(self, chosen, pid, name)
 
     def slot_is_alive(self, slot: int, pid: int, now: int | None = None) -> bool:
         """A lease: slot ``slot`` still belongs to ``pid``, which beat it in time."""
         if not 0 <= slot < NUM_SLOTS:
             return False
-        slot_pid, state, timeout, beat, _, _ = _SLOT.unpack_from(self._mm, _slot_at(slot))
-        age = (now_ns() if now is None else now) - beat
-        return slot_pid == pid and state == ALIVE and age <= timeout
+        at = _slot_at(slot)
+        if self._get_i32(at + _SLOT_PID_AT) != pid or self._get_u32(at + _STATE_AT) != ALIVE:
+            return False
+        age = (now_ns() if now is None else now) - self._get_u64(at + _BEAT_AT)
+        return age <= self._get_u64(at + _TIMEOUT_AT)
 
     def find_lost(self, now: int | None = None) -> list[LostProcess]:
         """Mark supervised processes that stopped beating or left as lost, and return
         the ones this call marked (each is found once, by whoever looks first)."""
+        if self.is_shutting_down:
+            return []
         now = now_ns() if now is None else now
-        is_shutting_down = self.is_shutting_down
         found = []
         for index in range(NUM_SLOTS):
             at = _slot_at(index)
-            pid, state, timeout, beat, is_supervised, name = _SLOT.unpack_from(self._mm, at)
-            if not is_supervised or state not in (ALIVE, EXITED) or is_shutting_down:
+            state = self._get_u32(at + _STATE_AT)
+            if state not in (ALIVE, EXITED) or not self._get_u32(at + _SUPERVISED_AT):
                 continue
-            label = f"{_text(name)} (pid {pid})"
+            slot = self._slot(index)
+            label = f"{slot.name} (pid {slot.pid})"
             if state == EXITED:
                 reason = f"{label} has exited"
-            elif now - beat > timeout:
-                seconds = (now - beat) / 1e9
+            elif now - slot.beat > slot.timeout:
+                seconds = (now - slot.beat) / 1e9
                 reason = (
-                    f"{label} is gone" if not _is_alive(pid) else f"{label} stopped answering"
+                    f"{label} is gone" if not _is_alive(slot.pid) else f"{label} stopped answering"
                 ) + f" (no heartbeat for {seconds:.2f} s)"
             else:
                 continue
-            struct.pack_into("<I", self._mm, at + _STATE_AT, LOST)
-            found.append(LostProcess(index, _text(name), pid, reason))
+            self._put_u32(at + _STATE_AT, LOST)
+            found.append(LostProcess(index, slot.name, slot.pid, reason))
         return found
 
     def mark_lost(self, pid: int, reason: str) -> LostProcess | None:
         """The launcher saw process ``pid`` end: mark its supervised slot lost now,
         rather than after its heartbeat timeout. None if it had none or was marked."""
+        if self.is_shutting_down:
+            return None
         for index in range(NUM_SLOTS):
-            at = _slot_at(index)
-            slot_pid, state, _, _, is_supervised, name = _SLOT.unpack_from(self._mm, at)
-            if slot_pid == pid and is_supervised and state in (ALIVE, EXITED):
-                if self.is_shutting_down:
-                    return None
-                struct.pack_into("<I", self._mm, at + _STATE_AT, LOST)
-                return LostProcess(index, _text(name), pid, reason)
+            slot = self._slot(index)
+            if slot.pid == pid and slot.is_supervised and slot.state in (ALIVE, EXITED):
+                self._put_u32(_slot_at(index) + _STATE_AT, LOST)
+                return LostProcess(index, slot.name, pid, reason)
         return None
 
     def lost_names(self) -> list[str]:
         """Supervised processes lost and not back: E-stop may not be reset meanwhile."""
-        names = []
-        for index in range(NUM_SLOTS):
-            pid, state, _, _, is_supervised, name = _SLOT.unpack_from(self._mm, _slot_at(index))
-            if is_supervised and state == LOST:
-                names.append(f"{_text(name)} (pid {pid})")
-        return names
+        return [
+            f"{slot.name} (pid {slot.pid})"
+            for slot in map(self._slot, range(NUM_SLOTS))
+            if slot.is_supervised and slot.state == LOST
+        ]
 
 
 class Heartbeat:
     """This process's slot on the board."""
 
-    __slots__ = ("_at", "_mm", "board", "name", "pid", "slot")
+    __slots__ = ("_beat_index", "board", "name", "pid", "slot")
 
     def __init__(self, board: SafetyBoard, slot: int, pid: int, name: str) -> None:
         self.board = board
         self.slot = slot
         self.pid = pid
         self.name = name
-        self._mm = board._mm
-        self._at = _slot_at(slot) + _BEAT_AT
+        self._beat_index = (_slot_at(slot) + _BEAT_AT) >> 3
 
     def beat(self) -> None:
-        _U64.pack_into(self._mm, self._at, time.monotonic_ns())
+        """Raises ValueError once the board is closed (the machine stopped)."""
+        self.board._u64[self._beat_index] = time.monotonic_ns()
 
     def leave(self) -> None:
         """A clean exit: a supervised process that leaves while the machine runs is lost
         all the same (its inputs are no longer read), but it says so at once."""
-        if self._mm.closed:
+        board = self.board
+        if board.is_closed:
             return
         at = _slot_at(self.slot)
-        if struct.unpack_from("<i", self._mm, at)[0] == self.pid:
-            struct.pack_into("<I", self._mm, at + _STATE_AT, EXITED)
+        if board._get_i32(at + _SLOT_PID_AT) == self.pid:
+            board._put_u32(at + _STATE_AT, EXITED)
 
 
 class RequestWatcher:
@@ -323,10 +391,6 @@ def _slot_at(index: int) -> int:
     return SLOTS_AT + index * SLOT_SIZE
 
 
-def _text(raw: bytes) -> str:
-    return raw.rstrip(b"\0").decode("utf-8", errors="replace")
-
-
 def _is_alive(pid: int) -> bool:
     if pid <= 0:
         return False
@@ -350,6 +414,8 @@ class Tick:
 
 
 LOST_SCAN_NS = 20_000_000  # how often a process looks for lost ones (20 ms)
+_NOTHING_LOST: list[LostProcess] = []
+_QUIET = Tick(None, None, _NOTHING_LOST)
 
 
 class SafetyLink:
@@ -376,15 +442,19 @@ class SafetyLink:
         return cls(board, heartbeat)
 
     def tick(self) -> Tick:
+        """Cheap when nothing happened (motion calls it every servo period)."""
         self.heartbeat.beat()
-        lost: list[LostProcess] = []
+        lost = _NOTHING_LOST
         now = now_ns()
         if now >= self._next_scan:
             self._next_scan = now + LOST_SCAN_NS
             lost = self.board.find_lost(now)
             for process in lost:
                 self.board.request_estop(process.reason, is_braking=True)
-        return Tick(self.watcher.take_estop(), self.watcher.take_abort(), lost)
+        estop, abort = self.watcher.take_estop(), self.watcher.take_abort()
+        if estop is None and abort is None and not lost:
+            return _QUIET
+        return Tick(estop, abort, lost)
 
     def close(self) -> None:
         self.heartbeat.leave()

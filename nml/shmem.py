@@ -92,10 +92,20 @@ _SLOT_FIELDS = {
     "missed": (24, "<I"),  # broadcast: messages dropped before it read them (queue full)
 }
 SLOT_SIZE = 32
+# (code of the typed view, item index) of each header field, and (offset, code, item size)
+# of each slot field: see ShmBuffer._map
+_FIELD_CODES = ("I", "Q", "q", "i")
+_HEADER_INDEX = {
+    key: (fmt[1], offset // struct.calcsize(fmt)) for key, (offset, fmt) in _HEADER_FIELDS.items()
+}
+_SLOT_INDEX = {
+    key: (offset, fmt[1], struct.calcsize(fmt)) for key, (offset, fmt) in _SLOT_FIELDS.items()
+}
+_SEQ_INDEX = _HEADER_INDEX["seq"][1]
+_WRITE_COUNT_INDEX = _HEADER_INDEX["write_count"][1]
+_LATEST_LEN_INDEX = _HEADER_INDEX["latest_len"][1]
 RECORD = struct.Struct("<IIQ")  # queue record: length, reserved, sequence number
-_U64 = struct.Struct("<Q")
 _IDENTITY = struct.Struct("<II")  # magic, version at offset 0
-_LATEST_STATE = struct.Struct("<QQQ")  # seq, write_count, latest_len: read in one go
 
 
 # this process's pid, kept up to date across fork: getpid is a system call, and a lock
@@ -302,8 +312,15 @@ class ShmBuffer:
         self._mm = mmap.mmap(shm.fd, self.layout.segment_size)
         shm.close_fd()
         self._view = memoryview(self._mm)
+        # Header and slot fields are read and written whole, one aligned load or store,
+        # through these typed views: struct.pack_into zeroes a field before writing it, and
+        # a reader without the lock (status, has_new_data) would see the zeros.
+        self._typed = {code: self._view.cast(code) for code in _FIELD_CODES}
 
     def _unmap(self) -> None:
+        for typed in getattr(self, "_typed", {}).values():
+            typed.release()
+        self._typed = {}
         if self._view is not None:
             self._view.release()
             self._view = None
@@ -351,23 +368,23 @@ class ShmBuffer:
 
     # ------------------------------------------------------------------ header access
     def _get(self, key: str) -> int:
-        offset, fmt = _HEADER_FIELDS[key]
-        return struct.unpack_from(fmt, self._mm, offset)[0]  # type: ignore[arg-type]
+        code, index = _HEADER_INDEX[key]
+        return self._typed[code][index]
 
     def _put(self, key: str, value: int) -> None:
-        offset, fmt = _HEADER_FIELDS[key]
-        struct.pack_into(fmt, self._mm, offset, value)  # type: ignore[arg-type]
+        code, index = _HEADER_INDEX[key]
+        self._typed[code][index] = value
 
     def _slot_offset(self, index: int) -> int:
         return self.layout.slots_offset + index * SLOT_SIZE
 
     def _slot_get(self, index: int, key: str) -> int:
-        offset, fmt = _SLOT_FIELDS[key]
-        return struct.unpack_from(fmt, self._mm, self._slot_offset(index) + offset)[0]  # type: ignore[arg-type]
+        offset, code, size = _SLOT_INDEX[key]
+        return self._typed[code][(self._slot_offset(index) + offset) // size]
 
     def _slot_put(self, index: int, key: str, value: int) -> None:
-        offset, fmt = _SLOT_FIELDS[key]
-        struct.pack_into(fmt, self._mm, self._slot_offset(index) + offset, value)  # type: ignore[arg-type]
+        offset, code, size = _SLOT_INDEX[key]
+        self._typed[code][(self._slot_offset(index) + offset) // size] = value
 
     def _slot_clear(self, index: int) -> None:
         start = self._slot_offset(index)
@@ -710,18 +727,18 @@ class ShmBuffer:
             msg._arr[...] = found._arr
             return True
         target = msg.byte_view() if target is None else target
-        mm, view = self._mm, self._view
-        seq_at, start = _HEADER_FIELDS["seq"][0], self.layout.data_offset
+        mm, view, words = self._mm, self._view, self._typed["Q"]
+        start = self.layout.data_offset
         expected = (msg.TYPE, msg.dtype.itemsize, msg.layout_crc, Encoding.FIXED)
         length_needed = HEADER.size + msg.dtype.itemsize
         spins = 0
         while True:
-            seq, _, length = _LATEST_STATE.unpack_from(mm, seq_at)  # type: ignore[arg-type]
+            seq, length = words[_SEQ_INDEX], words[_LATEST_LEN_INDEX]
             if not seq & 1:
                 header = HEADER.unpack_from(mm, start) if length else None  # type: ignore[arg-type]
                 if header == expected and length == length_needed:
                     target[:] = view[start + HEADER.size : start + length_needed]  # type: ignore[index]
-                if _U64.unpack_from(mm, seq_at)[0] == seq:  # type: ignore[arg-type]
+                if words[_SEQ_INDEX] == seq:
                     if not length:
                         return False
                     if header != expected or length != length_needed:
@@ -799,23 +816,23 @@ class ShmBuffer:
 
     def _latest_bytes(self) -> tuple[bytearray | None, int]:
         """Copy the status message out between two equal even sequence numbers (seqlock)."""
-        mm, view = self._mm, self._view
-        seq_at = _HEADER_FIELDS["seq"][0]
+        view, words = self._view, self._typed["Q"]
         start = self.layout.data_offset
         capacity = self.layout.capacity
         spins = 0
         while True:
-            seq, count, length = _LATEST_STATE.unpack_from(mm, seq_at)  # type: ignore[arg-type]
+            seq = words[_SEQ_INDEX]
+            count, length = words[_WRITE_COUNT_INDEX], words[_LATEST_LEN_INDEX]
             if not seq & 1:
                 if length > capacity:
-                    if _U64.unpack_from(mm, seq_at)[0] == seq:  # type: ignore[arg-type]
+                    if words[_SEQ_INDEX] == seq:
                         raise self._reset_corrupt(
                             f"buffer {self.name}: header claims a {length}-byte message in a "
                             f"{capacity}-byte buffer (corrupt)"
                         )
                     continue
                 data = bytearray(view[start : start + length]) if length else None  # type: ignore[index]
-                if _U64.unpack_from(mm, seq_at)[0] == seq:  # type: ignore[arg-type]
+                if words[_SEQ_INDEX] == seq:
                     return data, count
             spins += 1
             if spins > 100:
