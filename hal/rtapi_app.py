@@ -41,6 +41,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from cnc.stdio import protect_output
 from hal.api import RtComponent, set_shared_hal
 from hal.core import HAL_BIT, HAL_OUT, HAL_RO, HAL_RW, HAL_S32, Hal, HalError
 from nml.ipcnames import ipc_name
@@ -117,12 +118,12 @@ def parse_module_args(words: list[str]) -> dict[str, str]:
 class _Funct:
     """One HAL function as a thread calls it, with its timing pin and params."""
 
-    __slots__ = ("call", "is_disabled", "name", "time", "tmax", "tmax_increased")
+    __slots__ = ("call", "has_failed", "name", "time", "tmax", "tmax_increased")
 
     def __init__(self, hal: Hal, comp: str, name: str, call: Callable[[int], None]) -> None:
         self.name = name
         self.call = call
-        self.is_disabled = False
+        self.has_failed = False  # raised since it last ran through: said once, E-stop
         self.time = hal.new_pin(comp, f"{name}.time", HAL_S32, HAL_OUT)
         self.tmax = hal.new_param(comp, f"{name}.tmax", HAL_S32, HAL_RW)
         self.tmax_increased = hal.new_param(comp, f"{name}.tmax-increased", HAL_BIT, HAL_RO)
@@ -186,16 +187,15 @@ class RtThread(threading.Thread):
             if is_running:
                 before = start
                 for entry in chain:
-                    if entry.is_disabled:
-                        continue
                     try:
                         entry.call(period)
-                    except Exception:
-                        entry.is_disabled = True
-                        print(
-                            f"HAL: function '{entry.name}' failed and is disabled:", file=sys.stderr
-                        )
-                        traceback.print_exc()
+                    except Exception as exc:
+                        if not entry.has_failed:
+                            entry.has_failed = True
+                            self.host.function_failed(entry.name, exc)
+                    else:
+                        if entry.has_failed:
+                            entry.has_failed = False
                     after = clock()
                     spent = min(after - before, S32_MAX)
                     q[ptr[entry.time]] = spent
@@ -254,6 +254,19 @@ class Host:
         self._warned: set[str] = set()
         self.is_exiting = threading.Event()
         set_shared_hal(hal)
+
+    def function_failed(self, name: str, exc: Exception) -> None:
+        """A HAL function raised: it keeps being called (a disabled function would leave
+        what it drives unsupervised, motion's outputs frozen with the amplifiers on), it
+        is said once, and the machine goes to E-stop through the safety board."""
+        print(f"HAL: function '{name}' failed (machine to E-stop):", file=sys.stderr)
+        traceback.print_exception(exc, file=sys.stderr)
+        from nml.safety import SafetyBoard
+
+        board = SafetyBoard.attach()
+        if board is not None:
+            board.request_estop(f"HAL function {name} failed: {type(exc).__name__}: {exc}")
+            board.close()
 
     # ------------------------------------------------------------ realtime setup
     def warn_once(self, key: str, text: str) -> None:
@@ -673,6 +686,7 @@ def host_options_from_env() -> dict[str, Any]:
 
 
 def main(argv: list[str] | None = None) -> int:
+    protect_output()  # a closed stderr pipe must not kill it (cnc/stdio.py)
     options = host_options_from_env()
     parser = argparse.ArgumentParser(prog="rtapi_app", description=__doc__.splitlines()[0])
     parser.add_argument("--no-rt", action="store_true", help="no SCHED_FIFO, no mlockall")

@@ -155,6 +155,17 @@ class Inputs:
     axis_wheels: dict[int, WheelInputs] = field(default_factory=dict)  # axis index -> wheel
 
 
+@dataclass
+class JogLease:
+    """A continuous jog's requester: its heartbeat slot on the safety board and pid (pid 0:
+    none, the jog runs ``periods_left`` periods unless a new EMC_JOG_CONT renews it)."""
+
+    name: str  # "joint 0", "axis X": for the message when it is stopped
+    slot: int
+    pid: int
+    periods_left: int = -1  # set by the first check of an unleased jog
+
+
 class MotionController:
     def __init__(
         self,
@@ -231,6 +242,8 @@ class MotionController:
         self._pending_douts: list[tuple[int, bool]] = []
         self._pending_aouts: list[tuple[int, float]] = []
         self._status_runs: MotionStatusRuns | None = None  # of the last fill_status's record
+        # continuous jogs and who asked for them: (is joint, index) -> lease (motion/safety.py)
+        self.jog_leases: dict[tuple[bool, int], JogLease] = {}
 
     # ================================================================ commands
     def handle(self, cmd: emc.NMLmsg) -> str | None:
@@ -272,6 +285,23 @@ class MotionController:
         self._stop_everything_now()
         return None
 
+    def estop(self) -> None:
+        """E-stop from the safety board: motion off at once and every spindle stopped,
+        whatever task does (task says why, or the process that asked for it)."""
+        self._disable()
+        self.stop_spindles()
+
+    def abort_all(self) -> None:
+        """Abort from the safety board: as task's abort, every spindle stops too."""
+        self._abort(None)
+        self.stop_spindles()
+
+    def stop_spindles(self) -> None:
+        for spindle in self.spindles:
+            spindle.stop_orienting()
+            spindle.speed = spindle.css_factor = 0.0
+            spindle.is_brake_on = True
+
     def fault(self, message: str) -> None:
         """A fault (found during a period, or motmod's report of an internal error): say
         so and turn motion off."""
@@ -279,6 +309,7 @@ class MotionController:
         self._disable()
 
     def _stop_everything_now(self) -> None:
+        self.jog_leases.clear()
         self.homing.abort()
         self._orient_wait = None
         for joint in self.joints:
@@ -286,8 +317,9 @@ class MotionController:
         self.tp.set_position(list(self.carte_pos_cmd))
         self._reset_teleop()
 
-    def _abort(self, _cmd: emc.NMLmsg) -> None:
+    def _abort(self, _cmd: emc.NMLmsg | None) -> None:
         """ABORT: always accepted, idempotent; decelerates, then empties the queue (MOT-022)."""
+        self.jog_leases.clear()
         self.homing.abort()
         for planner in (j.planner for j in self.joints):
             planner.stop()
@@ -361,7 +393,25 @@ class MotionController:
                 planner.jog_abs(cmd.pos, abs(cmd.vel), override)
         except JogLimitError as exc:
             return f"{name}: {exc}"
+        key = (cmd.jjogmode == emc.JOG_MODE.JOINT, index)
+        if isinstance(cmd, emc.EMC_JOG_CONT):  # runs while its requester keeps the lease
+            self.jog_leases[key] = JogLease(name, cmd.lease_slot, cmd.lease_pid)
+        else:
+            self.jog_leases.pop(key, None)
         return None
+
+    def jog_planner(self, key: tuple[bool, int]) -> FreePlanner:
+        """The planner of a jog lease's key: (is joint, index)."""
+        is_joint, index = key
+        return self.joints[index].planner if is_joint else self.axis_planners[index]
+
+    def stop_jog(self, key: tuple[bool, int], reason: str) -> None:
+        """Brake a continuous jog to a stop (its requester went quiet) and say why."""
+        self.jog_leases.pop(key, None)
+        planner = self.jog_planner(key)
+        if planner.is_active:
+            planner.stop()
+            self.errors.append(reason)
 
     def _has_axis(self, index: int) -> bool:
         return bool(getattr(self.kins, "axis_mask", 0b111) >> index & 1)

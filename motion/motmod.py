@@ -39,6 +39,7 @@ from motion.homing import load_homing
 from motion.kinematics import KinematicsError, load_kinematics
 from motion.modules import ModuleInterfaceError
 from motion.pose import AXIS_LETTERS
+from motion.safety import DEFAULT_HEARTBEAT_TIMEOUT_S, MotionSafety
 from motion.tp import load_planner
 from nml import emc
 from nml.channels import EMC_ERROR, MOTION_COMMAND, MOTION_STATUS, Nml, load_config
@@ -183,7 +184,10 @@ class Motmod:
             raise HalError(f"motmod: cannot connect to the NML buffers: {exc}") from None
         self.status = emc.EMC_MOTION_STAT()
         self.pending_errors: list[str] = []
+        # the safety board: E-stop/abort requests, heartbeats, jog leases (motion/safety.py)
+        self.safety = MotionSafety.open(self.controller, period_s, _heartbeat_timeout())
         self._is_period_error_said = False  # (an internal error, since motion was last on)
+        self._is_failure_said = False  # (a fault outside the controller, see _fail)
         self.hal = hal
         # what _write_pins last wrote of the values that seldom change
         self._written_generation = -1
@@ -214,7 +218,14 @@ class Motmod:
     # ------------------------------------------------------------------ functions
     def command_handler(self, period: int) -> None:
         """Carry out the commands queued since the last period (MOT-009), for about a
-        quarter of the period at most (``period`` in ns)."""
+        quarter of the period at most (``period`` in ns). Never raises: a fault here
+        stops the machine (_fail) rather than leaving the host to disable the function."""
+        try:
+            self._handle_commands(period)
+        except Exception as exc:
+            self._fail("in the command handler", exc)
+
+    def _handle_commands(self, period: int) -> None:
         commands = self.nml[MOTION_COMMAND]
         if not commands.has_new_data():  # most periods: a look at the queue's count
             return
@@ -229,8 +240,8 @@ class Motmod:
                 cmd = commands.read()
             except NmlTimeoutError:
                 break  # busy this instant: next period
-            except NmlError as exc:
-                self.pending_errors.append(f"motion: bad command: {exc}")
+            except NmlError as exc:  # a command may have been lost: stop the machine
+                self._fail("reading its commands", exc)
                 continue
             if cmd is None:
                 break
@@ -250,7 +261,17 @@ class Motmod:
             started = ended
 
     def controller_period(self, period: int) -> None:
-        """One servo period: pins in, controller, pins out, status out (MOT-010..016)."""
+        """One servo period: safety board, pins in, controller, pins out, status out
+        (MOT-010..016). Never raises (see command_handler)."""
+        try:
+            self._run_period()
+        except Exception as exc:
+            self._fail("in a servo period", exc)
+
+    def _run_period(self) -> None:
+        safety = self.safety
+        if safety is not None:
+            safety.period()
         inputs = self.inputs
         for index, pins in enumerate(self.joints):
             inputs.motor_pos_fb[index] = pins.motor_pos_fb
@@ -288,11 +309,32 @@ class Motmod:
         else:
             if controller.is_enabled:
                 self._is_period_error_said = False
+                self._is_failure_said = False
         self._write_pins()
         self.pending_errors.extend(controller.errors)
         controller.errors.clear()
+        if safety is not None and safety.messages:
+            self.pending_errors.extend(safety.messages)
+            safety.messages.clear()
         controller.fill_status(self.status)
         self._publish()
+
+    def _fail(self, where: str, exc: Exception) -> None:
+        """A fault in one of motion's functions (a bug, a corrupt buffer): motion off, the
+        machine to E-stop, the operator told; said once until motion is turned on again.
+        The function keeps running: a disabled one would leave the machine unsupervised."""
+        if self._is_failure_said:
+            return
+        self._is_failure_said = True
+        text = f"motion: fault {where}: {type(exc).__name__}: {exc}; E-stop"
+        with contextlib.suppress(Exception):
+            self.controller.fault(text)
+        if self.safety is not None:
+            with contextlib.suppress(Exception):
+                self.safety.board.request_estop(text)
+        with contextlib.suppress(Exception):
+            self._write_pins()
+            self._publish()
 
     def _internal_error(self, where: str, exc: Exception) -> None:
         """What an exception inside the controller does: motion off (everything stops where
@@ -400,6 +442,20 @@ class Motmod:
             except NmlTimeoutError:
                 return
             self.pending_errors.pop(0)
+
+
+def _heartbeat_timeout() -> float:
+    """[EMCMOT]HEARTBEAT_TIMEOUT of the machine's INI ($CNC_INI_FILE, from the launcher)."""
+    path = os.environ.get("CNC_INI_FILE")
+    if not path:
+        return DEFAULT_HEARTBEAT_TIMEOUT_S
+    from cnc.ini import IniError, IniFile
+
+    try:
+        value = IniFile.load(path).get_float("EMCMOT", "HEARTBEAT_TIMEOUT")
+    except (IniError, OSError, ValueError):
+        return DEFAULT_HEARTBEAT_TIMEOUT_S
+    return DEFAULT_HEARTBEAT_TIMEOUT_S if value is None else value
 
 
 def _read_wheel(pins: JointPins | AxisPins, wheel: WheelInputs) -> None:

@@ -1,4 +1,5 @@
-"""broken: a test component whose function raises; the host must disable it, not die."""
+"""broken: a test component whose function raises; the host must say so once, keep calling it
+and not die."""
 
 from hal.api import RtComponent, funct, pin
 
