@@ -11,11 +11,13 @@ import argparse
 import sys
 
 from cnc.ini import IniError
+from cnc.stdio import protect_output
 from iocontrol.config import load_io_config
 from iocontrol.controller import run
 
 
 def main(argv: list[str] | None = None) -> int:
+    protect_output()  # a closed stderr pipe must not kill it (cnc/stdio.py)
     parser = argparse.ArgumentParser(
         prog="iocontrol", description="e-stop, coolant, lube and tool changer I/O over HAL"
     )

@@ -42,12 +42,20 @@ from nml.channels import EMC_ERROR, TOOL_COMMAND, TOOL_STATUS, Nml, load_config
 from nml.errors import NmlError, NmlFormatError
 from nml.ipcnames import ipc_name
 from nml.message import RCS_STATUS, NMLmsg
+from nml.outbox import Outbox
+from nml.safety import BRAKE_TIMEOUT_S, SafetyLink
 from nml.shmem import is_process_alive
 
 COMPONENT = "iocontrol"
 PREFIX = "iocontrol.0"
 NML_PROCESS = "tool"
 HANDSHAKE_POLL_S = 0.002  # how often tool-prepared / tool-changed are checked while pending
+# Unchanged status is written again this often: a reader that reset a corrupt status buffer
+# (nml/shmem.py) sees it again soon.
+REPUBLISH_S = 0.5
+# A braking E-stop opens the E-stop chain at the latest this long after it was asked for
+# (motion brakes for at most BRAKE_TIMEOUT_S, then asks for the immediate one).
+BRAKE_FALLBACK_S = BRAKE_TIMEOUT_S + 1.0
 
 # LinuxCNC's pins (io(1)): name, type, direction.
 PINS = (
@@ -133,6 +141,10 @@ class IoControl:
         self.comp: component | None = None
         self.tool_data: ToolDataWriter | None = None
         self.nml: Nml | None = None
+        self.outbox: Outbox | None = None
+        self.safety: SafetyLink | None = None
+        self.braking_estop_at = 0.0  # a braking E-stop: the chain opens when motion stopped
+        self._published_at = 0.0
         self._handlers = self._command_handlers()
 
     # ------------------------------------------------------------------ set-up
@@ -157,6 +169,8 @@ class IoControl:
         self.nml = Nml(
             load_config(self.config.nml_file), NML_PROCESS, [TOOL_COMMAND, TOOL_STATUS, EMC_ERROR]
         )
+        self.outbox = Outbox(self.nml[EMC_ERROR])
+        self.safety = SafetyLink.open("iocontrol", self.config.heartbeat_timeout)
         for text in self._startup_errors:
             self.report_error(text)
         self.update()
@@ -174,6 +188,9 @@ class IoControl:
     def close(self) -> None:
         """Save the tool table if it changed, remove the tool data store, leave HAL, close
         NML (IO-003)."""
+        if self.safety is not None:
+            self.safety.close()
+            self.safety = None
         self.save_table_if_changed()
         if self.tool_data is not None:
             self.tool_data.close()
@@ -201,6 +218,7 @@ class IoControl:
     def run(self) -> None:
         """The main loop (IO-003) until SIGTERM / SIGINT."""
         while not self.is_stopping:
+            self.take_safety_requests()
             self.update()
             self.publish()
             timeout = self.cycle_time
@@ -209,6 +227,30 @@ class IoControl:
             msg = self._next_command(timeout)
             if msg is not None:
                 self.execute(msg)
+
+    def take_safety_requests(self) -> None:
+        """Beat iocontrol's heartbeat; E-stop and abort from the safety board act here
+        even when task is stuck. A braking E-stop (a process was lost) opens the E-stop
+        chain only when motion, at rest, asks for the immediate one, or after
+        BRAKE_FALLBACK_S (motion may be the process that is gone)."""
+        if self.safety is None:
+            return
+        tick = self.safety.tick()
+        for lost in tick.lost:
+            self.report_error(f"E-stop: {lost.reason}")
+        if tick.estop is not None:
+            if tick.estop.is_braking:
+                self.braking_estop_at = self.braking_estop_at or time.monotonic()
+            else:
+                self.braking_estop_at = 0.0
+                self._estop_on(None)
+        if self.braking_estop_at and time.monotonic() - self.braking_estop_at > BRAKE_FALLBACK_S:
+            self.braking_estop_at = 0.0
+            self._estop_on(None)
+        if tick.abort is not None:
+            self._abort(None)
+        if tick.estop is not None or tick.abort is not None:
+            self._write_outputs()
 
     def stop(self, *_: Any) -> None:
         """Signal handler: leave the main loop at the next wake-up."""
@@ -288,9 +330,11 @@ class IoControl:
         assert self.nml is not None
         st = self.build_status()
         key = st.to_bytes()
-        if key == self._published:
+        now = time.monotonic()
+        if key == self._published and now - self._published_at < REPUBLISH_S:
             return
         self._published = key
+        self._published_at = now
         self.heartbeat += 1
         st.heartbeat = self.heartbeat
         self.nml[TOOL_STATUS].write(st)
@@ -302,13 +346,8 @@ class IoControl:
     def report_error(self, text: str) -> None:
         """An operator error: on stderr and on emcError, where every GUI shows it."""
         self._warn(text)
-        if self.nml is None:
-            return
-        try:
-            message = emc.EMC_OPERATOR_ERROR(id=0, error=emc.fit_text(text))
-            self.nml[EMC_ERROR].write(message, is_oldest_dropped=True)  # (never waits)
-        except NmlError as exc:
-            self._warn(f"cannot report the error on {EMC_ERROR}: {exc}")
+        if self.outbox is not None:
+            self.outbox.error(text)  # (never waits for a reader)
 
     # ------------------------------------------------------------------ commands
     def execute(self, msg: NMLmsg) -> None:

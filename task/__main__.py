@@ -13,6 +13,7 @@ import signal
 import sys
 
 from cnc.ini import IniError, IniFile
+from cnc.stdio import protect_output
 from nml.channels import (
     EMC_COMMAND,
     EMC_ERROR,
@@ -40,6 +41,7 @@ BUFFERS = [
 
 
 def main(argv: list[str] | None = None) -> int:
+    protect_output()  # a closed stderr pipe must not kill it (cnc/stdio.py)
     parser = argparse.ArgumentParser(prog="task", description=__doc__.split("\n\n")[0])
     parser.add_argument("-ini", "--ini", required=True, help="the machine's INI file")
     args = parser.parse_args(argv)

@@ -14,11 +14,13 @@ import sys
 from cnc.halui.config import load_config
 from cnc.halui.core import warn
 from cnc.ini import IniError
+from cnc.stdio import protect_output
 
 INI_ENV = "CNC_INI_FILE"
 
 
 def main(argv: list[str] | None = None) -> int:
+    protect_output()  # a closed stderr pipe must not kill it (cnc/stdio.py)
     parser = argparse.ArgumentParser(
         prog="halui", description="drive the machine from HAL pins (buttons, knobs, lamps)"
     )

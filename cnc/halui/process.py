@@ -17,12 +17,14 @@ from typing import Any
 
 from cnc.api import error
 from cnc.api.commands import command
+from cnc.api.safety import use_heartbeat
 from cnc.api.status import stat
 from cnc.halui.config import HaluiConfig
 from cnc.halui.core import Halui, warn
 from cnc.halui.pins import COMPONENT, create_pins
 from hal.core import Hal, HalError
 from nml import emc
+from nml.safety import SafetyLink
 
 
 class HaluiCommand(command):
@@ -60,18 +62,23 @@ def run(config: HaluiConfig) -> int:
         warn(str(exc))
         hal.close()
         return 1
-    status = command_channel = None
+    status = command_channel = safety = None
     try:
         pins = create_pins(hal, config)
         status = stat(config.ini_path)
         command_channel = HaluiCommand(config.ini_path)
         halui = Halui(config, pins, status, command_channel)
+        # halui's pins carry E-stop and jogs: supervised; its jogs are leased to its loop
+        safety = SafetyLink.open("halui", config.heartbeat_timeout)
+        use_heartbeat(safety.heartbeat if safety is not None else None)
         hal.ready(COMPONENT)
-        _serve(halui, config.cycle_time, stopper)
+        _serve(halui, config.cycle_time, stopper, safety)
     except (HalError, error) as exc:
         warn(str(exc))
         return 1
     finally:
+        if safety is not None:
+            safety.close()
         for channel in (status, command_channel):
             if channel is not None:
                 channel.close()
@@ -81,9 +88,12 @@ def run(config: HaluiConfig) -> int:
     return 0
 
 
-def _serve(halui: Halui, cycle_time: float, stopper: _Stopper) -> None:
+def _serve(halui: Halui, cycle_time: float, stopper: _Stopper, safety: SafetyLink | None) -> None:
     is_up = False  # whether the last cycle reached the controller (a loss is told once)
     while not stopper.is_stopping:
+        if safety is not None:  # heartbeat; lost processes get their E-stop from here too
+            for lost in safety.tick().lost:
+                warn(f"E-stop: {lost.reason}")
         try:
             halui.step()
             is_up = True

@@ -6,6 +6,7 @@ machine's HAL (setp / net on ``iocontrol.0.*``), like a tool changer or an e-sto
 
 from __future__ import annotations
 
+import contextlib
 import random
 import signal
 import subprocess
@@ -356,6 +357,8 @@ def test_unknown_and_unsupported_commands_are_reported(machine: Machine) -> None
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
 def test_signal_exits_cleanly_and_leaves_hal(machine: Machine, sig: signal.Signals) -> None:
     machine.proc.send_signal(sig)
+    with contextlib.suppress(subprocess.TimeoutExpired):  # (stop() would send SIGTERM at once,
+        machine.proc.wait(timeout=WAIT_S)  # which could reach a process already finalizing)
     code, err = stop(machine.proc)
     assert code == 0, err
     assert "iocontrol" not in machine.hal.meta["comps"]
