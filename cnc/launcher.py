@@ -34,10 +34,14 @@ from cnc.runtime import (
     remove_runtime_info,
     write_runtime_info,
 )
-from nml.channels import DEFAULT_NML_FILE, EMC_STATUS, Nml, load_config
+from cnc.stdio import protect_output
+from nml.channels import DEFAULT_NML_FILE, EMC_ERROR, EMC_STATUS, MOTION_STATUS, Nml, load_config
 from nml.config import NmlConfig
 from nml.errors import NmlError
 from nml.ipcnames import INSTANCE_ENV, current_instance, remove_instance_objects
+from nml.outbox import Outbox
+from nml.safety import BRAKE_TIMEOUT_S, SafetyBoard
+from task.positions import write_positions
 
 READY_TIMEOUT_S = 20.0
 PR_SET_PDEATHSIG = 1
@@ -64,6 +68,9 @@ class Launcher:
         self.is_owner = False
         self.is_stopping = False
         self.instance_lock: int | None = None
+        self.board: SafetyBoard | None = None
+        self.outbox: Outbox | None = None
+        self.reported_exits: set[int] = set()  # pids of children whose end was handled
 
     # ------------------------------------------------------------------ start-up
     def start(self) -> None:
@@ -76,13 +83,14 @@ class Launcher:
                 f"stop it first, or set {INSTANCE_ENV} to run another one"
             )
         self.is_owner = True  # from here on this instance is ours to clean up
-        leftovers = remove_instance_objects()
-        if leftovers:
-            say(f"removed {len(leftovers)} stale shared-memory objects of a previous run")
+        self._remove_leftovers()
+        # first: E-stop and abort requests and heartbeats, before any process that uses them
+        self.board = SafetyBoard.create()
         nml_file = self._nml_file()
         config = load_config(nml_file)
         say(f"NML buffers from {nml_file}")
         self.nml = Nml(config, _master_process(config))
+        self.outbox = Outbox(self.nml[EMC_ERROR])
         os.environ["CNC_NML_FILE"] = nml_file
         os.environ["CNC_INI_FILE"] = self.ini_path
         # replaceable trajectory planner and homing modules, read by motmod (ARCH-008)
@@ -124,6 +132,18 @@ class Launcher:
             self._run_hal_file(hal_file)
         write_runtime_info(self.ini_path, nml_file)  # scripts find it from now on
         say(f"machine ready ({self.ini_path})")
+
+    def _remove_leftovers(self) -> None:
+        """A previous run killed with SIGKILL (its processes stopped with it, through
+        PR_SET_PDEATHSIG) leaves its shared memory and semaphores: say whose, remove them."""
+        stale = read_runtime_info(is_stale_included=True)
+        leftovers = remove_instance_objects()
+        if leftovers:
+            whose = f" (launcher pid {stale.pid}, gone, {stale.ini})" if stale else ""
+            say(
+                f"removed {len(leftovers)} shared-memory objects left by a previous run of "
+                f"instance '{current_instance()}'{whose}"
+            )
 
     def _nml_file(self) -> str:
         name = self.ini.find("EMC", "NML_FILE")
@@ -242,16 +262,72 @@ class Launcher:
 
     # ------------------------------------------------------------------ running
     def wait(self) -> int:
-        """Until the display exits, a signal arrives, or task or the host dies."""
+        """Until the display exits, a signal arrives, or task or the host dies. Every
+        process the launcher started is watched: one that ends while the machine runs is
+        a lost process (nml/safety.py): motion brakes, the machine goes to E-stop and
+        every UI is told which; heartbeats that stop are found here too."""
         while not self.is_stopping:
             if self.display is not None and self.display.poll() is not None:
                 return 0
-            for name, proc in (("task", self.task), ("the realtime host", self.host)):
-                if proc is not None and proc.poll() is not None:
-                    say(f"{name} exited unexpectedly (status {proc.returncode}); shutting down")
-                    return 1
+            for name, proc in self._children():
+                if proc.poll() is not None and proc.pid not in self.reported_exits:
+                    self.reported_exits.add(proc.pid)
+                    status = self._child_exited(name, proc)
+                    if status is not None:
+                        return status
+            for lost in self.board.find_lost():
+                self.board.request_estop(lost.reason, is_braking=True)
+                self.outbox.error(f"E-stop: {lost.reason}")
+            self.outbox.flush()
             time.sleep(0.05)
         return 0
+
+    def _children(self) -> list[tuple[str, subprocess.Popen[bytes]]]:
+        children = [("task", self.task), ("the realtime host", self.host)]
+        if self.hal_session is not None:
+            children += list(self.hal_session.user_procs.items())
+        return [(name, proc) for name, proc in children if proc is not None]
+
+    def _child_exited(self, name: str, proc: subprocess.Popen[bytes]) -> int | None:
+        """React to a child that ended: E-stop if it carried safety I/O; the status to exit
+        with if the machine cannot go on without it (task, the realtime host)."""
+        how = _exit_description(proc.returncode)
+        reason = f"{name} (pid {proc.pid}) {how}"
+        lost = self.board.mark_lost(proc.pid, reason)
+        if lost is not None or proc in (self.task, self.host):
+            self.board.request_estop(reason, is_braking=True)
+            self.outbox.error(f"E-stop: {reason}")
+            self.outbox.flush()
+        say(f"{reason}" + ("; shutting down" if proc in (self.task, self.host) else ""))
+        if proc is self.task:
+            self._save_positions_for_task()
+            return 1
+        if proc is self.host:
+            return 1
+        return None
+
+    def _save_positions_for_task(self, timeout: float = BRAKE_TIMEOUT_S + 1.0) -> None:
+        """Task died without saving the joint positions: save the ones motion reports once
+        it has braked to rest (task/positions.py), so the next start knows where it is."""
+        name = (self.ini.find("TRAJ", "POSITION_FILE") or "").strip()
+        if not name:
+            return
+        path = Path(name).expanduser()
+        path = path if path.is_absolute() else self.folder / path
+        status = None
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            with contextlib.suppress(NmlError):
+                status = self.nml[MOTION_STATUS].peek()
+            if status is not None and status.traj.inpos and not status.traj.current_vel:
+                break
+            time.sleep(0.01)
+        if status is None:
+            return
+        try:
+            write_positions(path, [joint.output for joint in status.joint])
+        except OSError as exc:
+            self.outbox.error(f"cannot save the joint positions to {path}: {exc}")
 
     # ------------------------------------------------------------------ shut-down
     def stop(self) -> None:
@@ -259,6 +335,8 @@ class Launcher:
         if not self.is_owner:
             return  # refused before starting anything: another machine's things stay
         say("shutting down")
+        if self.board is not None:
+            self.board.begin_shutdown()  # processes leaving now are not lost
         _terminate(self.display, "display")
         _terminate(self.task, "task", timeout=10)
         if self.is_hal_loaded and self.host is not None and self.host.poll() is None:
@@ -268,7 +346,11 @@ class Launcher:
             self.hal_session.hal.close()
         _terminate(self.host, "realtime host")
         if self.nml is not None:
+            if self.outbox is not None:
+                self.outbox.flush()
             self.nml.close()
+        if self.board is not None:
+            self.board.unlink()
         remove_runtime_info()
         leftovers = remove_instance_objects()
         if leftovers:
@@ -313,11 +395,21 @@ def say(text: str) -> None:
     print(f"cnc: {text}", file=sys.stderr, flush=True)
 
 
+def _exit_description(returncode: int) -> str:
+    if returncode < 0:
+        try:
+            return f"was killed by {signal.Signals(-returncode).name}"
+        except ValueError:
+            return f"was killed by signal {-returncode}"
+    return f"exited with status {returncode}"
+
+
 def main(argv: list[str]) -> int:
     parser = argparse.ArgumentParser(prog="cnc run", description=__doc__.split("\n\n")[0])
     parser.add_argument("ini", help="the machine's INI file")
     parser.add_argument("--headless", action="store_true", help="run without [DISPLAY]DISPLAY")
     args = parser.parse_args(argv)
+    protect_output()  # `cnc run ... | head` must not kill the machine when head exits
     try:
         launcher = Launcher(args.ini, is_headless=args.headless)
     except IniError as exc:

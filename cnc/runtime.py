@@ -55,8 +55,11 @@ def write_runtime_info(ini_path: str | os.PathLike[str], nml_path: str | os.Path
     return path
 
 
-def read_runtime_info(instance: str | None = None) -> RuntimeInfo | None:
-    """The running machine of an instance, or None (no file, unreadable, or stale)."""
+def read_runtime_info(
+    instance: str | None = None, *, is_stale_included: bool = False
+) -> RuntimeInfo | None:
+    """The running machine of an instance, or None (no file, unreadable, or stale; with
+    ``is_stale_included`` a stale one too: what a killed launcher left)."""
     try:
         record = json.loads(runtime_info_path(instance).read_text(encoding="utf-8"))
         info = RuntimeInfo(
@@ -67,7 +70,7 @@ def read_runtime_info(instance: str | None = None) -> RuntimeInfo | None:
         )
     except (OSError, ValueError, KeyError, TypeError):
         return None
-    return info if is_process_alive(info.pid) else None
+    return info if is_stale_included or is_process_alive(info.pid) else None
 
 
 def claim_instance() -> int | None:

@@ -23,12 +23,15 @@ from typing import Any
 from cnc.api import constants as c
 from cnc.api import error
 from cnc.api.connection import Link
+from cnc.api.safety import jog_lease, keep_alive, request_abort, request_estop
 from nml import emc
 from nml.channels import EMC_COMMAND, EMC_STATUS
 from nml.errors import NmlError
 from nml.message import RCS_CMD_MSG, RCS_STATUS
 
 DEFAULT_TIMEOUT_S = 5.0  # wait_complete() default and the wait for task to take a command
+SAFETY_SEND_S = 0.5  # how long E-stop/abort wait for the command buffer after the board
+WAIT_SLICE_S = 0.1  # waits for task are cut into slices this long
 TEXT_LIMIT = emc.LINELEN - 1  # bytes of an MDI command, file name or operator message
 _SERIAL_MODULUS = 1 << 31  # serial numbers wrap from 0x7FFFFFFF to 1
 
@@ -131,6 +134,20 @@ class command:  # LinuxCNC's name: linuxcnc.command
         except NmlError as exc:
             raise error(str(exc)) from None
 
+    def _send_safety(self, msg: emc.EMC_TASK_ABORT | emc.EMC_TASK_SET_STATE) -> None:
+        """E-stop and abort, already requested on the safety board (``msg.request``): the
+        command follows for task's answer. If another process holds the command buffer
+        (a stuck UI), the request has done its work: the command is given up after a
+        short wait rather than blocking this UI; with no board, it is an error as usual."""
+        if not msg.request:
+            self._send(msg)
+            return
+        try:
+            self._serial = self._link.buffer(EMC_COMMAND).write(msg, timeout=SAFETY_SEND_S)
+            self._watch(SAFETY_SEND_S, self._taken)
+        except NmlError:
+            pass  # the board carried it; task acts on it from there
+
     def _taken(self, status: emc.EMC_STAT) -> int | None:
         """0 once task has taken the last command (it echoes its serial or a later one)."""
         return 0 if serial_difference(status.echo_serial_number, self._serial) >= 0 else None
@@ -158,7 +175,8 @@ class command:  # LinuxCNC's name: linuxcnc.command
             remaining = deadline - time.monotonic()
             if remaining <= 0:
                 return None
-            latest = status_buffer.blocking_read(remaining)
+            keep_alive()  # (halui: its heartbeat, while it waits)
+            latest = status_buffer.blocking_read(min(remaining, WAIT_SLICE_S))
 
     def wait_complete(self, timeout: float = DEFAULT_TIMEOUT_S) -> int:
         """Wait for the last command to finish: RCS_DONE, RCS_ERROR, or -1 after ``timeout``."""
@@ -177,6 +195,9 @@ class command:  # LinuxCNC's name: linuxcnc.command
             raise ValueError(
                 "Machine state should be STATE_ESTOP, STATE_ESTOP_RESET, STATE_ON, or STATE_OFF"
             )
+        if state == c.STATE_ESTOP:  # first through the path no lock can block
+            self._send_safety(emc.EMC_TASK_SET_STATE(state=state, request=request_estop()))
+            return
         self._send(emc.EMC_TASK_SET_STATE(state=state))
 
     def mode(self, mode: int) -> None:
@@ -210,7 +231,7 @@ class command:  # LinuxCNC's name: linuxcnc.command
         self._send(message())
 
     def abort(self) -> None:
-        self._send(emc.EMC_TASK_ABORT())
+        self._send_safety(emc.EMC_TASK_ABORT(request=request_abort()))
 
     def reset_interpreter(self) -> None:
         self._send(emc.EMC_TASK_PLAN_INIT())
@@ -264,8 +285,17 @@ class command:  # LinuxCNC's name: linuxcnc.command
             )
         if action == c.JOG_STOP:
             self._send(emc.EMC_JOG_STOP(joint_or_axis=index, jjogmode=jjogmode))
-        elif action == c.JOG_CONTINUOUS:
-            self._send(emc.EMC_JOG_CONT(joint_or_axis=index, vel=values[0], jjogmode=jjogmode))
+        elif action == c.JOG_CONTINUOUS:  # leased: it stops if this process goes quiet
+            slot, pid = jog_lease()
+            self._send(
+                emc.EMC_JOG_CONT(
+                    joint_or_axis=index,
+                    vel=values[0],
+                    jjogmode=jjogmode,
+                    lease_slot=slot,
+                    lease_pid=pid,
+                )
+            )
         else:
             self._send(
                 emc.EMC_JOG_INCR(

@@ -7,7 +7,9 @@ message sent after it was created, and of those still queued for other channels 
 created (LinuxCNC's plain queue hands each message to one reader only).
 
 A channel holds the messages it has not read yet; one that is never polled makes the queue
-fill up, and writers then wait. Close a channel you stop polling (``close()``, or drop it).
+fill up; writers then drop the oldest messages (they never wait for a reader), and each
+channel that had not read them is told how many it missed. Close a channel you stop
+polling (``close()``, or drop it).
 """
 
 from __future__ import annotations
@@ -43,9 +45,18 @@ class error_channel:  # LinuxCNC's name: linuxcnc.error_channel
         self._link.try_attach(EMC_ERROR)  # from now on, every message is kept for us
 
     def poll(self) -> tuple[int, str] | None:
-        """The next message as ``(kind, text)``, or None; ``cnc.error`` if not running."""
+        """The next message as ``(kind, text)``, or None; ``cnc.error`` if not running.
+        Messages dropped before this channel read them (the buffer was full) are told
+        first, as one OPERATOR_ERROR saying how many."""
         try:
-            message = self._link.buffer(EMC_ERROR).read()
+            buffer = self._link.buffer(EMC_ERROR)
+            missed = buffer.take_missed()
+            if missed:
+                return emc.EMC_OPERATOR_ERROR.TYPE, (
+                    f"{missed} operator message(s) were dropped before this display read "
+                    "them: the error channel was full"
+                )
+            message = buffer.read()
         except NmlError as exc:
             raise error(str(exc)) from None
         if message is None:

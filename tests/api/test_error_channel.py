@@ -66,3 +66,22 @@ def test_a_new_channel_gets_what_is_still_queued_then_everything_after(controlle
 def test_poll_before_the_controller_is_up_raises_cnc_error() -> None:
     with pytest.raises(cnc.error, match="not running"):
         cnc.error_channel().poll()
+
+
+def test_a_reader_is_told_how_many_messages_it_missed_when_the_channel_was_full(
+    controller: Nml,
+) -> None:
+    channel = cnc.error_channel()
+    errors = controller[EMC_ERROR]
+    written = 0
+    while not errors.stats()["read_count"]:  # until the writer had to drop the oldest
+        errors.write(emc.EMC_OPERATOR_TEXT(text=f"burst {written}"), is_oldest_dropped=True)
+        written += 1
+    errors.write(emc.EMC_OPERATOR_TEXT(text="last"), is_oldest_dropped=True)
+    kind, text = channel.poll()
+    assert kind == cnc.OPERATOR_ERROR and text.startswith("2 operator message(s) were dropped")
+    got = []
+    while (message := channel.poll()) is not None:
+        got.append(message[1])
+    assert got[0] == "burst 2" and got[-1] == "last"  # the rest, in order, none twice
+    assert len(got) == written + 1 - 2
