@@ -80,6 +80,7 @@ Deviations from emccanon
 from __future__ import annotations
 
 import math
+import os
 from collections import deque
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -120,6 +121,8 @@ class CanonSetup:
     tool_change_position: list[float] | None = None
     # user M codes: M number (100..199) -> program to run with P and Q as arguments
     user_m_commands: dict[int, str] = field(default_factory=dict)
+    # folders (PROBEOPEN), LOGOPEN and LOGAPPEND may write in; None: anywhere
+    writable_dirs: list[str] | None = None
 
 
 @dataclass
@@ -913,6 +916,8 @@ class TaskCanon:
         if text.startswith("PROBEOPEN"):
             self._close_probe_file()
             name = text[len("PROBEOPEN") :].strip()
+            if not self._may_write(name, "PROBEOPEN"):
+                return
             try:
                 self._probe_file = open(name, "w", encoding="utf-8")  # noqa: SIM115
             except OSError:
@@ -934,8 +939,27 @@ class TaskCanon:
             self._log_file.write(text + "\n")
             self._log_file.flush()
 
+    def _may_write(self, name: str, what: str) -> bool:
+        """G-code may write files only in the writable folders (task may run as root: a
+        program must not be able to overwrite /etc/passwd); a refusal is an error."""
+        allowed = self.setup.writable_dirs
+        if allowed is None:
+            return True
+        target = os.path.realpath(name)
+        for folder in allowed:
+            root = os.path.realpath(folder)
+            if os.path.commonpath([root, target]) == root:
+                return True
+        self._error(
+            f"({what} {name}): refused, G-code writes files only in "
+            f"{', '.join(allowed)} ([RS274NGC]WRITABLE_DIRS adds folders)"
+        )
+        return False
+
     def _open_log(self, name: str, mode: str) -> None:
         self.LOGCLOSE()
+        if not self._may_write(name, "LOGOPEN" if mode == "w" else "LOGAPPEND"):
+            return
         try:
             self._log_file = open(name, mode, encoding="utf-8")  # noqa: SIM115
         except OSError:

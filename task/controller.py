@@ -139,6 +139,7 @@ class Task:
             random_toolchanger=self.setup.random_toolchanger,
             tool_change_position=self.setup.tool_change_position,
             user_m_commands=self.setup.user_m_commands,
+            writable_dirs=_writable_dirs(ini, self.setup),
         )
         self.canon = (canon_factory or TaskCanon)(canon_setup)
         # what the canon queues, with line numbers (it may hold INIT_CANON's settings already)
@@ -1093,6 +1094,19 @@ def _waits_for_motion(msg: emc.NMLmsg) -> bool:
     if isinstance(msg, WAITING_FOR_MOTION):
         return True
     return isinstance(msg, emc.EMC_MOTION_SET_AOUT | emc.EMC_MOTION_SET_DOUT) and bool(msg.now)
+
+
+def _writable_dirs(ini: IniFile, setup: MachineSetup) -> list[str]:
+    """Where G-code may write files ((PROBEOPEN), (LOGOPEN)): the machine's folder, its
+    [DISPLAY]PROGRAM_PREFIX and the folders of [RS274NGC]WRITABLE_DIRS (colon separated,
+    relative to the INI's folder). Task may run as root."""
+    folders = [str(setup.folder)]
+    prefix = ini.find("DISPLAY", "PROGRAM_PREFIX")
+    if prefix:
+        folders.append(setup.resolve(prefix))
+    extra = ini.find("RS274NGC", "WRITABLE_DIRS") or ""
+    folders += [setup.resolve(name) for name in extra.split(":") if name.strip()]
+    return folders
 
 
 def _store(pose: emc.EmcPose, values: Sequence[float]) -> None:

@@ -633,6 +633,24 @@ def test_log_file(tmp_path: Path) -> None:
     assert name.read_text() == "one\ntwo\n"
 
 
+def test_gcode_writes_files_only_in_the_writable_folders(tmp_path: Path) -> None:
+    (tmp_path / "machine").mkdir()
+    outside = tmp_path / "outside.txt"
+    outside.write_text("precious\n")
+    canon = make_canon(writable_dirs=[str(tmp_path / "machine")])
+    canon.COMMENT(f"PROBEOPEN {outside}")
+    canon.LOGOPEN(str(outside))
+    canon.LOGAPPEND(str(tmp_path / "machine" / ".." / "outside.txt"))  # no way around it
+    assert outside.read_text() == "precious\n"  # not truncated
+    refusals = [m.error for m in messages(canon, emc.EMC_OPERATOR_ERROR)]
+    assert len(refusals) == 3 and all("refused" in text for text in refusals)
+    assert "(PROBEOPEN " in refusals[0] and "WRITABLE_DIRS" in refusals[0]
+    canon.LOGOPEN(str(tmp_path / "machine" / "log.txt"))  # inside: allowed
+    canon.LOG("kept")
+    canon.LOGCLOSE()
+    assert (tmp_path / "machine" / "log.txt").read_text() == "kept\n"
+
+
 # ============================================================ with the interpreter
 class Machine:
     """The interpreter on a TaskCanon, with task's part played by hand: after each queue
