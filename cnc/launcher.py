@@ -275,8 +275,11 @@ class Launcher:
                     status = self._child_exited(name, proc)
                     if status is not None:
                         return status
+            for buffer in self.nml.channels.values():  # (garbage over a header)
+                buffer.claim_as_master()
             for lost in self.board.find_lost():
                 self.board.request_estop(lost.reason, is_braking=True)
+            for lost in self.board.take_unreported():
                 self.outbox.error(f"E-stop: {lost.reason}")
             self.outbox.flush()
             time.sleep(0.05)
@@ -296,8 +299,11 @@ class Launcher:
         lost = self.board.mark_lost(proc.pid, reason)
         if lost is not None or proc in (self.task, self.host):
             self.board.request_estop(reason, is_braking=True)
+        for told in self.board.take_unreported():
+            self.outbox.error(f"E-stop: {told.reason}")
+        if lost is None and proc in (self.task, self.host):
             self.outbox.error(f"E-stop: {reason}")
-            self.outbox.flush()
+        self.outbox.flush()
         say(f"{reason}" + ("; shutting down" if proc in (self.task, self.host) else ""))
         if proc is self.task:
             self._save_positions_for_task()

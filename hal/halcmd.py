@@ -43,11 +43,11 @@ from hal.core import (
 )
 from hal.rtapi_app import (
     host_environment,
-    is_alive,
     purge_dead_components,
     release_if_unused,
     socket_address,
 )
+from nml.shmem import is_process_alive
 
 HOST_START_TIMEOUT_S = 15.0
 # halcmd's message levels: -Q, -q (default), -v, -V
@@ -410,7 +410,7 @@ class HalCmd:
         if proc is not None:
             proc.wait()
         while (comp := self.hal.meta["comps"].get(args[0])) is not None:
-            if not is_alive(comp["pid"]):
+            if not is_process_alive(comp["pid"]):
                 # it died without removing its component: do it for it
                 with contextlib.suppress(HalError):
                     self.hal.remove_component(args[0])
@@ -441,7 +441,7 @@ class HalCmd:
             proc = self.user_procs.get(name)
             if proc is not None:
                 proc.poll()
-            if not is_alive(pid):
+            if not is_process_alive(pid):
                 break  # died without removing its component: remove it below
             time.sleep(0.02)
         if name in self.hal.meta["comps"]:

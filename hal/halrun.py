@@ -20,8 +20,9 @@ import posix_ipc
 
 from hal.core import Hal, HalError, release_hal_mutex
 from hal.halcmd import VERBOSITY_ERRORS, HostClient, make_session, parse_options, run_session
-from hal.rtapi_app import is_alive, release_if_unused
+from hal.rtapi_app import release_if_unused
 from nml.ipcnames import instance_objects, ipc_name
+from nml.shmem import is_process_alive
 
 STOP_TIMEOUT_S = 3.0
 
@@ -47,10 +48,10 @@ def stop_processes(pids: set[int]) -> None:
         with contextlib.suppress(ProcessLookupError, PermissionError):
             os.kill(pid, signal.SIGTERM)
     deadline = time.monotonic() + STOP_TIMEOUT_S
-    while any(is_alive(pid) for pid in pids) and time.monotonic() < deadline:
+    while any(is_process_alive(pid) for pid in pids) and time.monotonic() < deadline:
         time.sleep(0.05)
     for pid in pids:
-        if is_alive(pid):
+        if is_process_alive(pid):
             with contextlib.suppress(ProcessLookupError, PermissionError):
                 os.kill(pid, signal.SIGKILL)
 

@@ -45,6 +45,7 @@ from cnc.stdio import protect_output
 from hal.api import RtComponent, set_shared_hal
 from hal.core import HAL_BIT, HAL_OUT, HAL_RO, HAL_RW, HAL_S32, Hal, HalError
 from nml.ipcnames import ipc_name
+from nml.shmem import is_process_alive
 
 CLOCK_MONOTONIC = 1
 TIMER_ABSTIME = 1
@@ -637,7 +638,7 @@ def default_rt_cpu() -> int:
 def purge_dead_components(hal: Hal) -> list[str]:
     """Remove components whose process is gone (a crashed userspace program or host)."""
     with hal.edit() as meta:
-        dead = [name for name, comp in meta["comps"].items() if not is_alive(comp["pid"])]
+        dead = [name for name, comp in meta["comps"].items() if not is_process_alive(comp["pid"])]
         for name in dead:
             hal.remove_component(name)
     return dead
@@ -651,16 +652,6 @@ def release_if_unused(hal: Hal) -> bool:
     if is_unused:
         hal.destroy()
     return is_unused
-
-
-def is_alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
 
 
 def _env_int(name: str, default: int | None) -> int | None:

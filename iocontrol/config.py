@@ -32,7 +32,7 @@ class IoConfig:
     is_random_toolchanger: bool = False
     cycle_time: float = DEFAULT_CYCLE_TIME_S
     nml_file: Path | None = None
-    heartbeat_timeout: float = 0.5  # [EMCIO]HEARTBEAT_TIMEOUT (nml/safety.py)
+    heartbeat_timeout: float = 1.0  # [EMCIO]HEARTBEAT_TIMEOUT (nml/safety.py)
     warnings: list[str] = field(default_factory=list)
 
 
@@ -59,7 +59,7 @@ def load_io_config(ini_path: str | os.PathLike[str]) -> IoConfig:
         tool_table=table,
         is_random_toolchanger=bool(ini.get_bool("EMCIO", "RANDOM_TOOLCHANGER", False)),
         nml_file=_resolve(ini, "EMC", "NML_FILE", None),
-        heartbeat_timeout=ini.get_float("EMCIO", "HEARTBEAT_TIMEOUT", 0.5) or 0.5,
+        heartbeat_timeout=ini.get_float("EMCIO", "HEARTBEAT_TIMEOUT", 1.0) or 1.0,
     )
     try:
         cycle = ini.get_float("EMCIO", "CYCLE_TIME")

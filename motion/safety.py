@@ -22,7 +22,7 @@ from nml.safety import BRAKE_TIMEOUT_S, SafetyBoard, SafetyLink, now_ns
 
 LEASE_CHECK_PERIODS = 10
 DEFAULT_UNLEASED_JOG_S = 0.5  # a continuous jog nobody keeps alive (pid 0) runs this long
-DEFAULT_HEARTBEAT_TIMEOUT_S = 0.2  # [EMCMOT]HEARTBEAT_TIMEOUT: motion's own
+DEFAULT_HEARTBEAT_TIMEOUT_S = 0.5  # [EMCMOT]HEARTBEAT_TIMEOUT: motion's own
 
 
 class MotionSafety:

@@ -37,6 +37,7 @@ from dataclasses import dataclass
 import posix_ipc
 
 from nml.ipcnames import ipc_name
+from nml.shmem import is_process_alive
 
 MAGIC = 0x46415331  # "1SAF"
 # A braking E-stop that has not brought motion to rest by then turns motion off anyway.
@@ -58,9 +59,12 @@ REQUEST_SIZE = 128
 ESTOP_AT = HEADER_SIZE
 ABORT_AT = ESTOP_AT + REQUEST_SIZE
 # a slot: pid i32, state u32 (written last), timeout u64 (ns), beat u64 (ns),
-# is_supervised u32, name (UTF-8, NUL padded)
-_SLOT_PID_AT, _STATE_AT, _TIMEOUT_AT, _BEAT_AT, _SUPERVISED_AT, _NAME_AT = 0, 4, 8, 16, 24, 32
-SLOT_SIZE = 64
+# is_supervised u32, is_reported u32 (a loss told to the operator), name, then the reason
+# of a loss (UTF-8, NUL padded)
+_SLOT_PID_AT, _STATE_AT, _TIMEOUT_AT, _BEAT_AT = 0, 4, 8, 16
+_SUPERVISED_AT, _REPORTED_AT, _NAME_AT, _LOSS_AT = 24, 28, 32, 64
+LOSS_BYTES = 64
+SLOT_SIZE = 128
 SLOTS_AT = ABORT_AT + REQUEST_SIZE
 SEGMENT_SIZE = SLOTS_AT + NUM_SLOTS * SLOT_SIZE
 
@@ -263,13 +267,16 @@ class SafetyBoard:
                 chosen = index  # back after being lost: take its place, E-stop may be reset
                 break
             # (a supervised slot of a dead process stays until someone finds it lost)
-            is_reusable = slot.state == FREE or (not slot.is_supervised and not _is_alive(slot.pid))
+            is_reusable = slot.state == FREE or (
+                not slot.is_supervised and not is_process_alive(slot.pid)
+            )
             if chosen is None and is_reusable:
                 chosen = index
         if chosen is None:
             raise RuntimeError(f"safety board: all {NUM_SLOTS} heartbeat slots are taken")
         at, pid = _slot_at(chosen), os.getpid()
         self._put_text(at + _NAME_AT, NAME_BYTES, name)
+        self._put_u32(at + _REPORTED_AT, 0)
         self._put_u64(at + _TIMEOUT_AT, max(int(timeout_s * 1e9), 1))
         self._put_u32(at + _SUPERVISED_AT, int(is_supervised))
         self._put_u64(at + _BEAT_AT, now_ns())
@@ -306,11 +313,34 @@ class SafetyBoard:
             elif now - slot.beat > slot.timeout:
                 seconds = (now - slot.beat) / 1e9
                 reason = (
-                    f"{label} is gone" if not _is_alive(slot.pid) else f"{label} stopped answering"
+                    f"{label} is gone"
+                    if not is_process_alive(slot.pid)
+                    else f"{label} stopped answering"
                 ) + f" (no heartbeat for {seconds:.2f} s)"
             else:
                 continue
-            self._put_u32(at + _STATE_AT, LOST)
+            self._lose(index, reason)
+            found.append(LostProcess(index, slot.name, slot.pid, reason))
+        return found
+
+    def _lose(self, index: int, reason: str) -> None:
+        at = _slot_at(index)
+        self._put_text(at + _LOSS_AT, LOSS_BYTES, reason)
+        self._put_u32(at + _REPORTED_AT, 0)
+        self._put_u32(at + _STATE_AT, LOST)
+
+    def take_unreported(self) -> list[LostProcess]:
+        """Losses nobody has told the operator about yet, now marked told: each is told
+        once, by a process that can write to the error channel (halui, which finds
+        losses too, cannot)."""
+        found = []
+        for index in range(NUM_SLOTS):
+            at = _slot_at(index)
+            if self._get_u32(at + _STATE_AT) != LOST or self._get_u32(at + _REPORTED_AT):
+                continue
+            self._put_u32(at + _REPORTED_AT, 1)
+            slot = self._slot(index)
+            reason = self._get_text(at + _LOSS_AT, LOSS_BYTES)
             found.append(LostProcess(index, slot.name, slot.pid, reason))
         return found
 
@@ -322,7 +352,7 @@ class SafetyBoard:
         for index in range(NUM_SLOTS):
             slot = self._slot(index)
             if slot.pid == pid and slot.is_supervised and slot.state in (ALIVE, EXITED):
-                self._put_u32(_slot_at(index) + _STATE_AT, LOST)
+                self._lose(index, reason)
                 return LostProcess(index, slot.name, pid, reason)
         return None
 
@@ -391,22 +421,10 @@ def _slot_at(index: int) -> int:
     return SLOTS_AT + index * SLOT_SIZE
 
 
-def _is_alive(pid: int) -> bool:
-    if pid <= 0:
-        return False
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
-
-
 @dataclass(frozen=True)
 class Tick:
-    """What one look at the board found: new requests, and processes this look found lost
-    (their braking E-stop is already requested; the caller tells the operator)."""
+    """What one look at the board found: new requests, and the lost processes this
+    process is to tell the operator about (their braking E-stop is requested already)."""
 
     estop: Request | None
     abort: Request | None
@@ -420,16 +438,20 @@ _QUIET = Tick(None, None, _NOTHING_LOST)
 
 class SafetyLink:
     """A process's part in the safety board, done once a cycle by ``tick()``: beat its
-    heartbeat, take new requests, look for lost processes."""
+    heartbeat, take new requests, look for lost processes (and, for a process that can
+    write to the error channel, ``is_reporter``, take the losses nobody reported yet)."""
 
-    def __init__(self, board: SafetyBoard, heartbeat: Heartbeat) -> None:
+    def __init__(self, board: SafetyBoard, heartbeat: Heartbeat, is_reporter: bool) -> None:
         self.board = board
         self.heartbeat = heartbeat
+        self.is_reporter = is_reporter
         self.watcher = board.watcher()
         self._next_scan = 0
 
     @classmethod
-    def open(cls, name: str, timeout_s: float, *, is_supervised: bool = True) -> SafetyLink | None:
+    def open(
+        cls, name: str, timeout_s: float, *, is_supervised: bool = True, is_reporter: bool = True
+    ) -> SafetyLink | None:
         """Register on the running machine's board; None without one."""
         board = SafetyBoard.attach()
         if board is None:
@@ -439,7 +461,7 @@ class SafetyLink:
         except RuntimeError:
             board.close()
             raise
-        return cls(board, heartbeat)
+        return cls(board, heartbeat, is_reporter)
 
     def tick(self) -> Tick:
         """Cheap when nothing happened (motion calls it every servo period)."""
@@ -448,9 +470,10 @@ class SafetyLink:
         now = now_ns()
         if now >= self._next_scan:
             self._next_scan = now + LOST_SCAN_NS
-            lost = self.board.find_lost(now)
-            for process in lost:
+            for process in self.board.find_lost(now):
                 self.board.request_estop(process.reason, is_braking=True)
+            if self.is_reporter:
+                lost = self.board.take_unreported()
         estop, abort = self.watcher.take_estop(), self.watcher.take_abort()
         if estop is None and abort is None and not lost:
             return _QUIET

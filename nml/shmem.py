@@ -132,8 +132,11 @@ def _align8(n: int) -> int:
     return (n + 7) & ~7
 
 
+PID_MAX = 1 << 22  # Linux's largest pid_max: anything above is not a pid (garbage)
+
+
 def is_process_alive(pid: int) -> bool:
-    if pid <= 0:
+    if not 0 < pid <= PID_MAX:
         return False
     try:
         os.kill(pid, 0)
@@ -178,10 +181,17 @@ class ShmBuffer:
     """One process's connection to one SHMEM buffer (the CMS of NML-046)."""
 
     def __init__(
-        self, buffer: BufferConfig, process: ProcessConfig, *, is_observer: bool = False
+        self,
+        buffer: BufferConfig,
+        process: ProcessConfig,
+        *,
+        is_observer: bool = False,
+        lock_timeout: float | None = None,
     ) -> None:
         """Create (master) or attach to a buffer. An observer (``cnc nml ls``/``dump``) takes
-        no connection slot and only looks: peek, stats, queued."""
+        no connection slot and only looks: peek, stats, queued. ``lock_timeout`` replaces
+        the P line's for taking a connection slot (under the buffer's lock, which a stuck
+        process may hold)."""
         self.config = buffer
         self.process = process
         self.name = buffer.name
@@ -210,7 +220,7 @@ class ShmBuffer:
         if is_observer:
             return
         try:
-            self._claim_slot()
+            self._claim_slot(lock_timeout)
         except BaseException:
             self._release_resources(is_unlinking=self.is_master)
             raise
@@ -401,9 +411,9 @@ class ShmBuffer:
         return sem
 
     # ------------------------------------------------------------------ connections
-    def _claim_slot(self) -> None:
+    def _claim_slot(self, lock_timeout: float | None = None) -> None:
         """Take a connection slot; refuse a process beyond max_procs (NML-010)."""
-        self._lock()
+        self._lock(lock_timeout)
         try:
             free, live = -1, []
             for index in range(self.config.max_procs):
@@ -437,10 +447,23 @@ class ShmBuffer:
         self._last_seen = self._get("write_count")
 
     def is_orphaned(self) -> bool:
-        """The master that made this buffer is gone: what it holds is left over."""
+        """The master that made this buffer is gone: what it holds is left over. (A
+        creator pid that is no pid at all is garbage, not a verdict: the master rewrites
+        it, see ``claim_as_master``.)"""
         self._require_open()
         creator = self._get("creator_pid")
+        if not 0 < creator <= PID_MAX:
+            return False
         return creator != os.getpid() and not is_process_alive(creator)
+
+    def claim_as_master(self) -> bool:
+        """The master's periodic check that the segment still names it as its creator
+        (garbage written over the header); rewrites it if not. True if it did."""
+        self._require_open()
+        if self._get("creator_pid") == os.getpid():
+            return False
+        self._put("creator_pid", os.getpid())
+        return True
 
     def connections(self) -> list[tuple[int, int]]:
         """(pid, c_num) of every process attached now."""

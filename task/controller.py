@@ -473,12 +473,16 @@ class Task:
         self.interp.synch()
         self.checked_motion_serial = self.last_motion_serial
         self.queue.line = 0  # MDI lines have no line number in a file
+        self.interp.slice_deadline = time.monotonic() + PLAN_SLICE_S  # (a subroutine call)
         try:
             status = self.interp.execute(text)
             self.canon.FINISH()  # queue a move held back for naive-CAM joining (G64 Q)
         except InterpError as exc:
             self.queue.clear()
             return str(exc)
+        finally:
+            self.interp.slice_deadline = None
+        self.idle_reading_s = 0.0
         self.run = Run.MDI
         self.is_reading_done = status != INTERP_EXECUTE_FINISH and not self.interp.call_level
         self.is_waiting_for_synch = status == INTERP_EXECUTE_FINISH
@@ -754,7 +758,13 @@ class Task:
 
     def _program_error(self, text: str) -> None:
         line = getattr(self.interp, "sequence_number", 0)
-        where = f" (line {line} of {self.file})" if self.run is Run.PROGRAM and self.file else ""
+        # the file the interpreter reads: the program, or a subroutine's file (MDI calls)
+        source = getattr(self.interp, "filename", "") or (
+            self.file if self.run is Run.PROGRAM else ""
+        )
+        where = (
+            f" (line {line} of {source})" if source and (self.run is Run.PROGRAM or line) else ""
+        )
         self.operator_error(f"{text}{where}")
         self.stat.task.interpreter_errcode = 1
         if self.pending_serial:

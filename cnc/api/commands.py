@@ -143,9 +143,10 @@ class command:  # LinuxCNC's name: linuxcnc.command
             self._send(msg)
             return
         try:
-            self._serial = self._link.buffer(EMC_COMMAND).write(msg, timeout=SAFETY_SEND_S)
+            buffer = self._link.buffer(EMC_COMMAND, lock_timeout=SAFETY_SEND_S)
+            self._serial = buffer.write(msg, timeout=SAFETY_SEND_S)
             self._watch(SAFETY_SEND_S, self._taken)
-        except NmlError:
+        except (NmlError, error):
             pass  # the board carried it; task acts on it from there
 
     def _taken(self, status: emc.EMC_STAT) -> int | None:

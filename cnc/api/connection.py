@@ -17,6 +17,7 @@ instead of waiting for the P line's timeout.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import os
 import sys
@@ -89,6 +90,7 @@ def is_running(buffer: str) -> bool:
 
 
 LIVENESS_CHECK_S = 0.2  # how often a link checks that the controller still runs
+ATTACH_NOW_S = 0.5  # what a constructor waits for a buffer's lock before attaching later
 
 
 class Link:
@@ -107,7 +109,7 @@ class Link:
     def close_with(self, owner: object) -> None:
         weakref.finalize(owner, self.close)
 
-    def buffer(self, name: str) -> ShmBuffer:
+    def buffer(self, name: str, lock_timeout: float | None = None) -> ShmBuffer:
         """The attached buffer ``name``; ``cnc.error`` if the controller is not running.
 
         Every LIVENESS_CHECK_S the buffers are checked: once the controller has stopped
@@ -120,15 +122,17 @@ class Link:
                 self.close()
         found = self._buffers.get(name)
         if found is None:
-            found = self._buffers[name] = self._attach(name)
+            found = self._buffers[name] = self._attach(name, lock_timeout)
         return found
 
     def try_attach(self, name: str) -> None:
-        """Attach now if the controller runs (else on first use)."""
+        """Attach now if the controller runs (else on first use). A buffer whose lock a
+        stuck process holds is attached later: making an API object never hangs."""
         if name not in self._buffers and is_running(name):
-            self.buffer(name)
+            with contextlib.suppress(error):
+                self.buffer(name, lock_timeout=ATTACH_NOW_S)
 
-    def _attach(self, name: str) -> ShmBuffer:
+    def _attach(self, name: str, lock_timeout: float | None = None) -> ShmBuffer:
         if name not in self.config.buffers:
             raise error(f"{self.nml_path}: no buffer '{name}' in this NML file")
         if not is_running(name):
@@ -137,7 +141,11 @@ class Link:
                 f"NML file {self.nml_path})"
             )
         try:
-            buffer = ShmBuffer(self.config.buffers[name], self.config.process(UI_PROCESS, name))
+            buffer = ShmBuffer(
+                self.config.buffers[name],
+                self.config.process(UI_PROCESS, name),
+                lock_timeout=lock_timeout,
+            )
         except NmlError as exc:
             raise error(str(exc)) from None
         if buffer.is_orphaned():

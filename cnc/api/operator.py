@@ -20,7 +20,7 @@ from cnc.api import error
 from cnc.api.connection import Link
 from nml import emc
 from nml.channels import EMC_ERROR
-from nml.errors import NmlError
+from nml.errors import NmlError, NmlFormatError
 
 # Message class -> the field holding its text.
 _TEXT_FIELDS = {
@@ -57,6 +57,8 @@ class error_channel:  # LinuxCNC's name: linuxcnc.error_channel
                     "them: the error channel was full"
                 )
             message = buffer.read()
+        except NmlFormatError as exc:  # found corrupt and repaired: said once, as a message
+            return emc.EMC_OPERATOR_ERROR.TYPE, f"error channel: {exc}"
         except NmlError as exc:
             raise error(str(exc)) from None
         if message is None:

@@ -27,7 +27,7 @@ class HaluiConfig:
     max_spindle_override: float = 1.0  # [DISPLAY]MAX_SPINDLE_OVERRIDE
     max_velocity: float = 1.0  # [TRAJ]MAX_LINEAR_VELOCITY, else [AXIS_X]MAX_VELOCITY
     cycle_time: float = CYCLE_TIME_S  # [HALUI]CYCLE_TIME (ours; LinuxCNC's is fixed)
-    heartbeat_timeout: float = 0.5  # [HALUI]HEARTBEAT_TIMEOUT (nml/safety.py)
+    heartbeat_timeout: float = 1.0  # [HALUI]HEARTBEAT_TIMEOUT (nml/safety.py)
 
 
 def load_config(ini_path: str | os.PathLike[str]) -> HaluiConfig:
@@ -49,7 +49,7 @@ def load_config(ini_path: str | os.PathLike[str]) -> HaluiConfig:
         max_spindle_override=_positive(ini, "DISPLAY", "MAX_SPINDLE_OVERRIDE", 1.0),
         max_velocity=_max_velocity(ini),
         cycle_time=_positive(ini, "HALUI", "CYCLE_TIME", CYCLE_TIME_S),
-        heartbeat_timeout=_positive(ini, "HALUI", "HEARTBEAT_TIMEOUT", 0.5),
+        heartbeat_timeout=_positive(ini, "HALUI", "HEARTBEAT_TIMEOUT", 1.0),
     )
 
 

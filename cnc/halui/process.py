@@ -69,7 +69,7 @@ def run(config: HaluiConfig) -> int:
         command_channel = HaluiCommand(config.ini_path)
         halui = Halui(config, pins, status, command_channel)
         # halui's pins carry E-stop and jogs: supervised; its jogs are leased to its loop
-        safety = SafetyLink.open("halui", config.heartbeat_timeout)
+        safety = SafetyLink.open("halui", config.heartbeat_timeout, is_reporter=False)
         use_heartbeat(safety.heartbeat if safety is not None else None)
         hal.ready(COMPONENT)
         _serve(halui, config.cycle_time, stopper, safety)
@@ -92,8 +92,7 @@ def _serve(halui: Halui, cycle_time: float, stopper: _Stopper, safety: SafetyLin
     is_up = False  # whether the last cycle reached the controller (a loss is told once)
     while not stopper.is_stopping:
         if safety is not None:  # heartbeat; lost processes get their E-stop from here too
-            for lost in safety.tick().lost:
-                warn(f"E-stop: {lost.reason}")
+            safety.tick()
         try:
             halui.step()
             is_up = True

@@ -12,8 +12,9 @@ import pytest
 
 from hal import rtapi_app
 from hal.core import Hal, release_hal_mutex
-from hal.rtapi_app import Host, default_rt_cpu, host_options_from_env, is_alive
+from hal.rtapi_app import Host, default_rt_cpu, host_options_from_env
 from nml.ipcnames import instance_objects, ipc_name
+from nml.shmem import is_process_alive
 from tests.hal.halrun_util import FILES, run_cnc
 
 # lines of LinuxCNC's uspace halcmd that come from it starting rtapi_app per loadrt
@@ -127,7 +128,7 @@ def test_halrun_force_cleanup_stops_a_stale_host_and_removes_hal(procs) -> None:
     assert result.returncode == 0, result.stderr
     assert host.wait(timeout=10) is not None
     deadline = time.monotonic() + 10
-    while is_alive(user.pid) and user.poll() is None and time.monotonic() < deadline:
+    while is_process_alive(user.pid) and user.poll() is None and time.monotonic() < deadline:
         time.sleep(0.05)
     assert user.poll() is not None
     assert instance_objects() == []  # no segment or semaphore left

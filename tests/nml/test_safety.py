@@ -123,3 +123,20 @@ def test_a_link_finds_lost_processes_and_asks_for_a_braking_estop(board: SafetyB
     assert tick.estop is not None and tick.estop.is_braking and "halui" in tick.estop.reason
     assert link.tick().estop is None
     link.close()
+
+
+def test_a_loss_found_by_a_process_that_cannot_tell_is_told_by_one_that_can(
+    board: SafetyBoard,
+) -> None:
+    board.register("task", 0.001, is_supervised=True)
+    time.sleep(0.01)
+    halui = SafetyLink.open("halui", 1.0, is_reporter=False)
+    tick = halui.tick()
+    assert tick.lost == [] and "task" in tick.estop.reason  # found: E-stop asked for
+    motion = SafetyLink.open("motion", 1.0)
+    assert [p.name for p in motion.tick().lost] == ["task"]  # told here, once
+    launcher_view = SafetyBoard.attach()
+    assert launcher_view.take_unreported() == []
+    launcher_view.close()
+    halui.close()
+    motion.close()
