@@ -71,6 +71,7 @@ class Launcher:
         self.board: SafetyBoard | None = None
         self.outbox: Outbox | None = None
         self.reported_exits: set[int] = set()  # pids of children whose end was handled
+        self.made_safe: set[int] = set()  # lost iocontrols whose outputs were made safe
 
     # ------------------------------------------------------------------ start-up
     def start(self) -> None:
@@ -281,6 +282,7 @@ class Launcher:
                 self.board.request_estop(lost.reason, is_braking=True)
             for lost in self.board.take_unreported():
                 self.outbox.error(f"E-stop: {lost.reason}")
+            self._make_lost_outputs_safe()
             self.outbox.flush()
             time.sleep(0.05)
         return 0
@@ -299,6 +301,7 @@ class Launcher:
         lost = self.board.mark_lost(proc.pid, reason)
         if lost is not None or proc in (self.task, self.host):
             self.board.request_estop(reason, is_braking=True)
+        self._make_lost_outputs_safe()
         for told in self.board.take_unreported():
             self.outbox.error(f"E-stop: {told.reason}")
         if lost is None and proc in (self.task, self.host):
@@ -311,6 +314,23 @@ class Launcher:
         if proc is self.host:
             return 1
         return None
+
+    def _make_lost_outputs_safe(self) -> None:
+        """A lost iocontrol (dead or frozen) no longer writes its HAL outputs, which hold
+        their last values: the E-stop chain would stay closed. Write their safe values,
+        through any signal they drive, once per loss."""
+        for lost in self.board.lost():
+            if lost.name != "iocontrol" or lost.pid in self.made_safe:
+                continue
+            self.made_safe.add(lost.pid)
+            from iocontrol.controller import SAFE_OUTPUTS
+
+            hal = self._hal().hal
+            for pin_name, value in SAFE_OUTPUTS.items():
+                found = hal.find_pin(pin_name)
+                if found is not None:
+                    pin = found[1]
+                    hal.write_slot(pin["type"], hal.ptr[pin["slot"]], value)
 
     def _save_positions_for_task(self, timeout: float = BRAKE_TIMEOUT_S + 1.0) -> None:
         """Task died without saving the joint positions: save the ones motion reports once

@@ -264,10 +264,14 @@ class Host:
         traceback.print_exception(exc, file=sys.stderr)
         from nml.safety import SafetyBoard
 
+        text = f"HAL function {name} failed: {type(exc).__name__}: {exc}; E-stop"
         board = SafetyBoard.attach()
         if board is not None:
-            board.request_estop(f"HAL function {name} failed: {type(exc).__name__}: {exc}")
+            board.request_estop(text)
             board.close()
+        motmod = getattr(self, "motmod", None)  # motion writes to the error channel
+        if motmod is not None:
+            motmod.pending_errors.append(text)
 
     # ------------------------------------------------------------ realtime setup
     def warn_once(self, key: str, text: str) -> None:

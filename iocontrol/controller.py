@@ -78,6 +78,23 @@ PINS = (
 )
 
 
+# What HAL should hold when iocontrol is gone (its pins keep their last values, and nobody
+# writes them any more): the E-stop chain open, coolant, lube and tool change off. The
+# launcher writes these when it finds iocontrol dead.
+SAFE_OUTPUTS = {
+    f"{PREFIX}.{name}": False
+    for name in (
+        "user-enable-out",
+        "user-request-enable",
+        "coolant-flood",
+        "coolant-mist",
+        "lube",
+        "tool-prepare",
+        "tool-change",
+    )
+}
+
+
 class CommandError(Exception):
     """A command iocontrol refuses; the text is for the operator."""
 

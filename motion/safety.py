@@ -26,11 +26,16 @@ DEFAULT_HEARTBEAT_TIMEOUT_S = 0.5  # [EMCMOT]HEARTBEAT_TIMEOUT: motion's own
 
 
 class MotionSafety:
-    def __init__(self, link: SafetyLink, controller: MotionController, period_s: float) -> None:
-        self.link = link
-        self.board: SafetyBoard = link.board
+    def __init__(
+        self, board: SafetyBoard, controller: MotionController, period_s: float, timeout_s: float
+    ) -> None:
+        self.board = board
         self.controller = controller
         self.period_s = period_s
+        self.heartbeat_timeout_s = timeout_s
+        # registered at the first period: before the threads start (HAL files still being
+        # read), motion runs nothing and must not be taken for lost
+        self.link: SafetyLink | None = None
         self.brake_deadline = 0  # monotonic ns; 0: not braking
         self.periods = 0
         self.messages: list[str] = []  # for the operator (motmod writes them)
@@ -39,11 +44,14 @@ class MotionSafety:
     def open(
         cls, controller: MotionController, period_s: float, heartbeat_timeout_s: float
     ) -> MotionSafety | None:
-        link = SafetyLink.open("motion", heartbeat_timeout_s)
-        return None if link is None else cls(link, controller, period_s)
+        board = SafetyBoard.attach()
+        return None if board is None else cls(board, controller, period_s, heartbeat_timeout_s)
 
     def period(self) -> None:
         """Once a servo period, before the controller's update."""
+        if self.link is None:
+            heartbeat = self.board.register("motion", self.heartbeat_timeout_s, is_supervised=True)
+            self.link = SafetyLink(self.board, heartbeat, is_reporter=True)
         tick = self.link.tick()
         controller = self.controller
         for lost in tick.lost:
@@ -98,4 +106,7 @@ class MotionSafety:
                     )
 
     def close(self) -> None:
-        self.link.close()
+        if self.link is not None:
+            self.link.close()
+        else:
+            self.board.close()

@@ -356,13 +356,18 @@ class SafetyBoard:
                 return LostProcess(index, slot.name, pid, reason)
         return None
 
-    def lost_names(self) -> list[str]:
+    def lost(self) -> list[LostProcess]:
         """Supervised processes lost and not back: E-stop may not be reset meanwhile."""
-        return [
-            f"{slot.name} (pid {slot.pid})"
-            for slot in map(self._slot, range(NUM_SLOTS))
-            if slot.is_supervised and slot.state == LOST
-        ]
+        found = []
+        for index in range(NUM_SLOTS):
+            slot = self._slot(index)
+            if slot.is_supervised and slot.state == LOST:
+                reason = self._get_text(_slot_at(index) + _LOSS_AT, LOSS_BYTES)
+                found.append(LostProcess(index, slot.name, slot.pid, reason))
+        return found
+
+    def lost_names(self) -> list[str]:
+        return [f"{process.name} (pid {process.pid})" for process in self.lost()]
 
 
 class Heartbeat:
