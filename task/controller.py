@@ -57,7 +57,7 @@ from task.interp.errors import (
     InterpError,
 )
 from task.positions import PositionFileError, begin_run, read_positions, write_positions
-from task.runfrom import STATE_MESSAGES, TOOL_CHANGES, enclosing_block
+from task.runfrom import STATE_MESSAGES, enclosing_block
 from task.setup import MachineSetup, load_setup
 
 log = logging.getLogger("task")
@@ -169,7 +169,9 @@ class Task:
         self.first_line = 0  # run from line: the lines before it are only interpreted
         self.is_skipping = False  # ... and these are being read
         self.skipped_state: dict[type, emc.NMLmsg] = {}  # the state the skipped lines set
-        self.skipped_tool_change = 0  # the last skipped line that changed the tool
+        # the last tool change of the skipped lines: (line, tool number), or None
+        self.skipped_tool_change: tuple[int, int] | None = None
+        self.skipped_prepared_tool = 0
         self.furthest_line = 0  # the furthest line of the program read so far
         self.is_stepping = False  # AUTO_STEP: one line at a time
         self.step_line: int | None = None  # the line this step carries out (None: the next)
@@ -534,7 +536,7 @@ class Task:
         self.first_line = cmd.line
         self.is_skipping = cmd.line > 1
         self.skipped_state.clear()
-        self.skipped_tool_change = 0
+        self.skipped_tool_change = None
         self.furthest_line = 0
         self.is_stepping = False
         return None
@@ -728,8 +730,13 @@ class Task:
         for msg in self.queue:
             if isinstance(msg, STATE_MESSAGES):
                 self.skipped_state[type(msg)] = msg
-            elif isinstance(msg, TOOL_CHANGES):
-                self.skipped_tool_change = self.interp.sequence_number
+            elif isinstance(msg, emc.EMC_TOOL_PREPARE):
+                self.skipped_prepared_tool = msg.tool
+            elif isinstance(msg, emc.EMC_TOOL_LOAD):  # M6: the prepared tool
+                self.skipped_tool_change = (self.interp.sequence_number, self.skipped_prepared_tool)
+            elif isinstance(msg, emc.EMC_TOOL_SET_NUMBER):  # M61: a tooldata index
+                tool = self.interp.tool_table[msg.tool].toolno
+                self.skipped_tool_change = (self.interp.sequence_number, tool)
             elif isinstance(msg, emc.EMC_OPERATOR_ERROR):
                 self._write_error_channel(msg)
         self.queue.clear()
@@ -742,13 +749,13 @@ class Task:
         before the start line's own messages. A tool changed by the skipped lines that is
         not the one in the spindle stops the run: its offsets would not be the tool's."""
         self.is_skipping = False
-        tool = int(self.interp.parameters[5400])
         in_spindle = self.stat.io.tool.toolInSpindle
-        if self.skipped_tool_change and tool != in_spindle:
+        if self.skipped_tool_change and self.skipped_tool_change[1] != in_spindle:
+            line, tool = self.skipped_tool_change
             raise InterpError(
-                f"cannot run from line {self.first_line}: line {self.skipped_tool_change} "
-                f"before it changes to tool {tool}, and the spindle holds tool {in_spindle}; "
-                f"load tool {tool} first, or start at line {self.skipped_tool_change} or before"
+                f"cannot run from line {self.first_line}: line {line} before it changes to "
+                f"tool {tool}, and the spindle holds tool {in_spindle}; load tool {tool} "
+                f"first, or start at line {line} or before"
             )
         for msg in self.skipped_state.values():
             self.queue.append(msg)

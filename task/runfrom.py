@@ -34,8 +34,6 @@ STATE_MESSAGES = (
     emc.EMC_TRAJ_SET_FH_ENABLE,
     emc.EMC_TRAJ_SET_SPINDLESYNC,
 )
-# Messages that change the tool in the spindle, which skipping cannot do.
-TOOL_CHANGES = (emc.EMC_TOOL_LOAD, emc.EMC_TOOL_SET_NUMBER)
 
 
 def enclosing_block(lines: Sequence[str], line: int) -> str | None:

@@ -167,3 +167,19 @@ def test_a_closed_stderr_pipe_does_not_stop_the_machine(procs, tmp_path: Path) -
     proc.send_signal(signal.SIGTERM)
     assert proc.wait(timeout=WAIT_S) == 0
     assert instance_objects() == []  # cleaned up as usual
+
+
+def test_a_failed_position_save_reaches_the_error_channel(start_faulty) -> None:
+    machine: FaultyMachine = start_faulty(TRAJ=["POSITION_FILE = gone/position.txt"])
+    texts: list[str] = []
+    machine.proc.send_signal(signal.SIGTERM)
+    while machine.proc.poll() is None:  # task saves while the launcher shuts down
+        try:
+            message = machine.errors.poll()
+        except cnc.error:
+            break  # the machine is gone
+        if message is None:
+            time.sleep(0.005)
+        else:
+            texts.append(message[1])
+    assert any("cannot save the joint positions to" in text for text in texts), texts

@@ -8,7 +8,16 @@ from pathlib import Path
 
 import pytest
 
-from tests.task.test_machine import MACHINE, Machine
+from tests.task.test_machine import MACHINE, Machine, launched
+
+
+@pytest.fixture
+def machine(procs, tmp_path: Path) -> Iterator[Machine]:
+    """The test mill (tests/task/machine, copied to a scratch folder), started headless."""
+    folder = tmp_path / "machine"
+    shutil.copytree(MACHINE, folder)
+    with launched(procs, folder) as machine:
+        yield machine
 
 
 @pytest.fixture

@@ -108,14 +108,6 @@ def launched(procs, folder: Path) -> Iterator[Machine]:
         machine.stop()
 
 
-@pytest.fixture
-def machine(procs, tmp_path: Path) -> Iterator[Machine]:
-    folder = tmp_path / "machine"
-    shutil.copytree(MACHINE, folder)
-    with launched(procs, folder) as machine:
-        yield machine
-
-
 def test_estop_reset_on_home_and_mdi_move(machine: Machine) -> None:
     s = machine.stat
     s.poll()
