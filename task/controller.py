@@ -148,6 +148,7 @@ class Task:
             self.canon, ini=ini, parameter_file=self.setup.parameter_file, task=1
         )
         self.interp.init()
+        self.interp.on_progress = self.keep_alive  # (reading a large program)
         self.current_line = 0  # the line of the message last taken from the queue
         self.mode = MODE.MANUAL
         self.state = STATE.ESTOP
@@ -260,6 +261,12 @@ class Task:
             self._abort()
         self.outbox.flush()
         self.publish()
+
+    def keep_alive(self) -> None:
+        """Beat task's heartbeat in the middle of a long piece of work (reading a large
+        program): task is alive, only busy; requests are taken at the next cycle."""
+        if self.safety is not None:
+            self.safety.heartbeat.beat()
 
     def take_safety_requests(self) -> None:
         """Beat task's heartbeat; act on new E-stop and abort requests of the safety board
@@ -520,7 +527,7 @@ class Task:
         self.interp.close()
         self.interp.open(self.file)
         if cmd.line > 1:
-            inside = enclosing_block(self.interp.file_lines or [], cmd.line)
+            inside = enclosing_block(self.interp.file_lines or [], cmd.line, self.keep_alive)
             if inside:
                 return (
                     f"cannot run from line {cmd.line}: it is inside {inside}, whose state "
@@ -935,10 +942,10 @@ class Task:
         channel = self.nml[buffer]
         deadline = time.monotonic() + timeout
         while True:
-            if self.safety is not None:  # alive while waiting; an E-stop ends the wait
-                self.safety.heartbeat.beat()
-                if self.safety.board.estop_stamp() != self.safety.watcher.estop_seen:
-                    return "E-stop was requested"
+            self.keep_alive()  # alive while waiting; an E-stop ends the wait
+            safety = self.safety
+            if safety is not None and safety.board.estop_stamp() != safety.watcher.estop_seen:
+                return "E-stop was requested"
             try:
                 stat = channel.peek()
             except NmlError:
@@ -1071,8 +1078,7 @@ class Task:
         self._abort()
         deadline = time.monotonic() + timeout
         while time.monotonic() < deadline:
-            if self.safety is not None:
-                self.safety.heartbeat.beat()
+            self.keep_alive()
             self.refresh()
             motion = self.stat.motion
             if motion.traj.inpos and motion.traj.queue == 0 and not motion.traj.current_vel:

@@ -9,7 +9,7 @@ parameters come from a call) or inside a loop body (which iteration?).
 from __future__ import annotations
 
 import re
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 from nml import emc
 
@@ -36,12 +36,19 @@ STATE_MESSAGES = (
 )
 
 
-def enclosing_block(lines: Sequence[str], line: int) -> str | None:
+def enclosing_block(
+    lines: Sequence[str], line: int, progress: Callable[[], None] | None = None
+) -> str | None:
     """Why the program cannot start at ``line`` (1-based), or None: the subroutine or
-    loop whose body holds it, e.g. "the body of o100 while (lines 12-30)"."""
+    loop whose body holds it, e.g. "the body of o100 while (lines 12-30)". ``progress``
+    is called every 10,000 lines (a large program takes a while)."""
     stack: list[tuple[str, str, int]] = []  # (o-name, keyword, line) of open blocks
     spans: list[tuple[str, str, int, int]] = []
     for number, text in enumerate(lines, start=1):
+        if progress is not None and not number % 10_000:
+            progress()
+        if "o" not in text and "O" not in text:
+            continue  # (most lines: no O-word, no regular expression)
         match = _OWORD.match(text)
         if match is None:
             continue

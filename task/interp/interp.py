@@ -150,6 +150,8 @@ from .reader import LINELEN, ReaderMixin, close_and_downcase, downcase
 from .stack import error_stack
 from .tools import ToolsMixin
 
+LOAD_CHUNK_BYTES = 1 << 18  # (about 8,000 lines of G-code)
+
 
 class Interpreter(
     ParamsMixin,
@@ -212,6 +214,9 @@ class Interpreter(
         self._plans: dict[str, LinePlan] = {}  # raw line -> its plan (see compiled.py)
         self.has_error_stack = False  # errors carry LinuxCNC's function stack (rs274 -s)
         self._file_cache: dict[str, list[str]] = {}
+        self._file_stamps: dict[str, tuple[int, int]] = {}  # (mtime, size) when read
+        # called between the pieces of a large file being read (see _load_file)
+        self.on_progress: Callable[[], None] | None = None
         self._compiled: dict = {}  # (line, position) -> compiled value (see compiled.py)
         self._compiler = Compiler(self)
         self._o_slots = [0.0] * 8  # the value stack O-word expressions share
@@ -568,17 +573,32 @@ class Interpreter(
 
     # ============================================================ open/close
     def _load_file(self, filename: str) -> list[str] | None:
+        """The file's lines, each with its newline (as fgets gives them), read in pieces
+        of LOAD_CHUNK_BYTES with ``on_progress()`` called between them: a caller that must
+        stay alive (task beats its heartbeat) is not blocked for a whole large program."""
+        lines: list[str] = []
+        tail = ""
+        progress = self.on_progress
         try:
             with open(filename, "rb") as handle:
-                data = handle.read()
+                found = os.fstat(handle.fileno())
+                stamp = (found.st_mtime_ns, found.st_size)
+                if self._file_stamps.get(filename) == stamp and filename in self._file_cache:
+                    return self._file_cache[filename]  # unchanged since read (a program re-run)
+                while True:
+                    data = handle.read(LOAD_CHUNK_BYTES)
+                    if not data:
+                        break
+                    pieces = (tail + data.decode("latin-1")).split("\n")
+                    tail = pieces.pop()  # an unfinished line: the next piece ends it
+                    lines += [piece + "\n" for piece in pieces]
+                    if progress is not None:
+                        progress()
         except OSError:
             return None
-        text = data.decode("latin-1")
-        lines = [line + "\n" for line in text.split("\n")]
-        if lines[-1] == "\n":
-            lines.pop()  # the text ended with a newline (or was empty)
-        else:
-            lines[-1] = lines[-1][:-1]
+        if tail:
+            lines.append(tail)  # the last line had no newline
+        self._file_stamps[filename] = stamp
         return lines
 
     def open(self, filename: str) -> int:
