@@ -59,6 +59,7 @@ from task.interp.errors import (
 from task.positions import PositionFileError, begin_run, read_positions, write_positions
 from task.runfrom import STATE_MESSAGES, enclosing_block
 from task.setup import MachineSetup, load_setup
+from task.watchdog import InterpreterInterruptedError, InterpreterWatchdog
 
 log = logging.getLogger("task")
 
@@ -181,6 +182,8 @@ class Task:
         self.safety = SafetyLink.open(
             "task", ini.get_float("TASK", "HEARTBEAT_TIMEOUT", DEFAULT_HEARTBEAT_TIMEOUT_S)
         )
+        # around every call into the interpreter: heartbeat, E-stop and abort while it runs
+        self.watchdog = InterpreterWatchdog(self.safety, self.interp_timeout)
         # the newest safety board requests task has acted on (by the board or a command)
         self.estop_handled = 0
         self.abort_handled = 0
@@ -478,14 +481,15 @@ class Task:
 
     def _start_mdi(self, text: str) -> str | bool:
         self.stat.task.command = emc.fit_text(text)
-        self.canon.set_status(self.stat)
-        self.interp.synch()
         self.checked_motion_serial = self.last_motion_serial
         self.queue.line = 0  # MDI lines have no line number in a file
         self.interp.slice_deadline = time.monotonic() + PLAN_SLICE_S  # (a subroutine call)
         try:
-            status = self.interp.execute(text)
-            self.canon.FINISH()  # queue a move held back for naive-CAM joining (G64 Q)
+            with self.watchdog:
+                self.canon.set_status(self.stat)
+                self.interp.synch()
+                status = self.interp.execute(text)
+                self.canon.FINISH()  # queue a move held back for naive-CAM joining (G64 Q)
         except InterpError as exc:
             self.queue.clear()
             return str(exc)
@@ -500,8 +504,9 @@ class Task:
     def _open(self, cmd: emc.EMC_TASK_PLAN_OPEN) -> str | None:
         if self.run is Run.PROGRAM:
             return "cannot open a program while one runs"
-        self.interp.close()
-        self.interp.open(cmd.file)
+        with self.watchdog:
+            self.interp.close()
+            self.interp.open(cmd.file)
         self.file = cmd.file
         self.current_line = 0
         return None
@@ -524,17 +529,18 @@ class Task:
         problem = self._ensure_coordinated()
         if problem:
             return problem
-        self.interp.close()
-        self.interp.open(self.file)
-        if cmd.line > 1:
-            inside = enclosing_block(self.interp.file_lines or [], cmd.line, self.keep_alive)
-            if inside:
-                return (
-                    f"cannot run from line {cmd.line}: it is inside {inside}, whose state "
-                    "cannot be known without running it; start at the block's first line"
-                )
-        self.canon.set_status(self.stat)
-        self.interp.synch()
+        with self.watchdog:
+            self.interp.close()
+            self.interp.open(self.file)
+            if cmd.line > 1:
+                inside = enclosing_block(self.interp.file_lines or [], cmd.line, self.keep_alive)
+                if inside:
+                    return (
+                        f"cannot run from line {cmd.line}: it is inside {inside}, whose state "
+                        "cannot be known without running it; start at the block's first line"
+                    )
+            self.canon.set_status(self.stat)
+            self.interp.synch()
         self.checked_motion_serial = self.last_motion_serial
         self.run = Run.PROGRAM
         self.is_paused = False
@@ -669,13 +675,15 @@ class Task:
             if self.queue or not self._is_everything_done():
                 return
             self.canon.set_status(self.stat)
-            self.interp.synch()
+            with self.watchdog:
+                self.interp.synch()
             self.is_waiting_for_synch = False
         started = time.monotonic()
         queued, furthest = len(self.queue), self.furthest_line
         self.interp.slice_deadline = started + PLAN_SLICE_S
         try:
-            self._read_ahead()
+            with self.watchdog:
+                self._read_ahead()
         finally:
             self.interp.slice_deadline = None
         if self.run is not Run.IDLE:
@@ -708,6 +716,12 @@ class Task:
                         status = INTERP_OK if status == INTERP_EXECUTE_FINISH else status
                     if status == INTERP_EXIT:
                         self.is_reading_done = True
+            except InterpreterInterruptedError as exc:
+                if exc.is_requested:  # task acts on the E-stop or abort right after
+                    self._abort()
+                else:
+                    self._program_error(str(exc))
+                return
             except InterpError as exc:
                 self._program_error(str(exc))
                 return

@@ -21,6 +21,7 @@ import pytest
 
 import cnc
 from cnc.runtime import read_runtime_info
+from nml.channels import DEFAULT_NML_FILE
 from nml.ipcnames import instance_objects, remove_instance_objects
 
 MACHINE = Path(__file__).with_name("machine")
@@ -153,15 +154,25 @@ def test_a_long_non_ascii_error_is_cut_to_fit_and_task_goes_on(machine: Machine)
     assert c.wait_complete(10) == cnc.RCS_DONE  # task is still there
 
 
-def test_errors_nobody_reads_keep_the_newest_and_never_stall_task(machine: Machine) -> None:
-    """A headless machine whose error channel nobody drains: once the queue is full the
-    oldest messages make room (task used to wait a second for room, then drop the newest)."""
+def test_errors_nobody_reads_keep_the_newest_and_never_stall_task(start_machine) -> None:
+    """A machine whose error channel nobody drains (here one a tenth of the usual size):
+    once the queue is full the oldest messages make room, and the reader is told how many
+    it missed (task used to wait a second for room, then drop the newest)."""
+    small = DEFAULT_NML_FILE.read_text().replace(
+        "emcError      SHMEM  localhost  262144", "emcError      SHMEM  localhost  26214"
+    )
+    machine = start_machine(files={"small.nml": small}, EMC=["NML_FILE = small.nml"])
     c = machine.command
     for index in range(150):  # far more than the channel holds
         c.error_msg(f"note {index}")
         assert c.wait_complete(5) == cnc.RCS_DONE
-    kept = [text for kind, text in machine.messages() if kind == cnc.OPERATOR_ERROR]
-    assert 10 < len(kept) < 150
+    texts = [text for kind, text in machine.messages() if kind == cnc.OPERATOR_ERROR]
+    missed = int(texts[0].split()[0])
+    assert texts[0].endswith(
+        "were dropped before this display read them: the error channel was full"
+    )
+    kept = [text for text in texts[1:] if text.startswith("note ")]
+    assert 10 < len(kept) < 150 and missed >= 150 - len(kept)
     assert kept == [f"note {index}" for index in range(150 - len(kept), 150)]
 
 
