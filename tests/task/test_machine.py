@@ -261,7 +261,7 @@ def test_killing_task_or_the_realtime_host_mid_program_stops_and_cleans_up(
     (pid,) = [pid for line, pid in machine_pids(proc, folder).items() if process in line]
     os.kill(pid, signal.SIGKILL)
     assert proc.wait(timeout=30) == 1  # the launcher noticed and shut everything down
-    assert f"{name} exited unexpectedly" in proc.stderr.read()
+    assert f"{name} (pid {pid}) was killed by SIGKILL; shutting down" in proc.stderr.read()
     assert all(not Path(f"/proc/{pid}").exists() for pid in machine_pids(proc, folder).values())
     assert instance_objects(cnc_instance) == []
 

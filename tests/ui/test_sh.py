@@ -18,11 +18,14 @@ from tests.ui.conftest import UI_MAIN, WAIT_S, read_until
 
 
 def kinds_and_fields(commands: list[dict]) -> list[tuple[str, dict]]:
-    """(type, fields without serial_number) of received commands."""
+    """(type, fields) of received commands, without serial numbers and what the safety
+    board adds (a request's stamp, a jog's lease: they change from run to run)."""
     return [
-        (c["type"], {k: v for k, v in c["fields"].items() if k not in ("serial_number", "tag")})
-        for c in commands
+        (c["type"], {k: v for k, v in c["fields"].items() if k not in _VARYING}) for c in commands
     ]
+
+
+_VARYING = ("serial_number", "tag", "request", "lease_slot", "lease_pid")
 
 
 def test_commands_are_sent_in_order_and_each_reports_done(fake_task, run_ui) -> None:
