@@ -295,3 +295,54 @@ class HalTcl:
 def _place_in_errorinfo(info: str) -> str:
     found = _ERRORINFO_PLACE.search(info)
     return f"{found.group(1)}:{found.group(2)}" if found else ""
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``cnc haltcl [-i INI] [FILE [ARGS...]]``: LinuxCNC's haltcl; without FILE, Tcl
+    commands from standard input (``haltcl:`` prompt on a terminal)."""
+    from hal.halcmd import HalCmd
+
+    args = list(sys.argv[1:] if argv is None else argv)
+    ini = None
+    if len(args) >= 2 and args[0] in ("-i", "-ini"):
+        from cnc.ini import IniError, IniFile
+
+        try:
+            ini = IniFile.load(args[1])
+        except IniError as exc:
+            print(f"haltcl: {exc}", file=sys.stderr)
+            return 1
+        args = args[2:]
+    session = HalCmd(ini=ini)
+    try:
+        haltcl = HalTcl(session, ini)
+        if args:
+            return 0 if haltcl.run_file(args[0], args[1:]) else 1
+        return _interactive(haltcl)
+    except HalError as exc:
+        print(f"haltcl: {exc}", file=sys.stderr)
+        return 1
+    finally:
+        session.hal.close()
+
+
+def _interactive(haltcl: HalTcl) -> int:
+    is_tty = sys.stdin.isatty()
+    pending = ""
+    while True:
+        if is_tty:
+            print("haltcl: " if not pending else "> ", end="", flush=True)
+        line = sys.stdin.readline()
+        if not line:
+            return 0
+        pending += line
+        if not haltcl.tcl.call("info", "complete", pending):
+            continue
+        script, pending = pending, ""
+        try:
+            result = haltcl.tcl.eval(script)
+        except Exception as exc:  # tkinter.TclError: show it, go on
+            print(exc, file=sys.stderr)
+            continue
+        if result and is_tty:
+            print(result)

@@ -78,11 +78,18 @@ def included_files(ini: Path) -> list[Path]:
 
 
 def first_error(log: str) -> str:
-    lines = [line for line in log.splitlines() if line.strip()]
-    for line in lines:
-        if not _PROGRESS.match(line):
-            return line.strip()
-    return lines[-1].strip() if lines else "(no output)"
+    """The launcher's complaint: the last message before it shut down that is neither
+    progress, a warning nor "see the message above"."""
+    lines = [line.strip() for line in log.splitlines() if line.strip()]
+    if "cnc: shutting down" in lines:
+        lines = lines[: lines.index("cnc: shutting down")]
+    for line in reversed(lines):
+        if _PROGRESS.match(line) or "(see the message above)" in line:
+            continue
+        if "warning" in line.lower() or "skipping" in line:
+            continue
+        return line
+    return lines[-1] if lines else "(no output)"
 
 
 # ------------------------------------------------------------------ one config, in a child
