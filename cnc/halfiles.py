@@ -53,7 +53,15 @@ GUI_PROGRAMS = {
     "gscreen": "gscreen display",
     "tklinuxcnc": "tklinuxcnc display",
     "pyngcgui": "ngcgui window",
+    "image-to-gcode": "image-to-gcode window",
+    "linuxcnctop": "linuxcnctop window",
 }
+# LinuxCNC's vismach models (3D views of machines), started by sim configs' HAL files
+VISMACH_MODELS = (
+    "5axisgui hbmgui hexagui lineardelta maho600gui max5gui melfagui millturngui puma560gui "
+    "pumagui rotarydelta scaragui xyzab-tdr-gui xyzac-trt-gui xyzbc-trt-gui vmcgui"
+).split()
+GUI_PROGRAMS.update(dict.fromkeys(VISMACH_MODELS, "vismach model"))
 # our programs standing in for LinuxCNC's (theirs cannot join this HAL)
 STAND_INS = {
     "hal_manualtoolchange": [sys.executable, "-m", "cnc.manualtoolchange"],
