@@ -184,8 +184,12 @@ class Motmod:
             raise HalError(f"motmod: cannot connect to the NML buffers: {exc}") from None
         self.status = emc.EMC_MOTION_STAT()
         self.pending_errors: list[str] = []
-        # the safety board: E-stop/abort requests, heartbeats, jog leases (motion/safety.py)
-        self.safety = MotionSafety.open(self.controller, period_s, _heartbeat_timeout())
+        # the safety board: E-stop/abort requests, heartbeats, jog leases (motion/safety.py);
+        # joined in the first servo period, when motion starts beating: the HAL files
+        # after loadrt motmod may take longer than a heartbeat's timeout before `start`
+        self.safety: MotionSafety | None = None
+        self._safety_args = (period_s, _heartbeat_timeout())
+        self._is_safety_joined = False
         self._is_period_error_said = False  # (an internal error, since motion was last on)
         self._is_failure_said = False  # (a fault outside the controller, see _fail)
         self.hal = hal
@@ -269,6 +273,9 @@ class Motmod:
             self._fail("in a servo period", exc)
 
     def _run_period(self) -> None:
+        if not self._is_safety_joined:
+            self._is_safety_joined = True
+            self.safety = MotionSafety.open(self.controller, *self._safety_args)
         safety = self.safety
         if safety is not None:
             safety.period()
