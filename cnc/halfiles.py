@@ -57,10 +57,24 @@ GUI_PROGRAMS = {
     "linuxcnctop": "linuxcnctop window",
 }
 # LinuxCNC's vismach models (3D views of machines), started by sim configs' HAL files
-VISMACH_MODELS = (
-    "5axisgui hbmgui hexagui lineardelta maho600gui max5gui melfagui millturngui puma560gui "
-    "pumagui rotarydelta scaragui xyzab-tdr-gui xyzac-trt-gui xyzbc-trt-gui vmcgui"
-).split()
+VISMACH_MODELS = [
+    "5axisgui",
+    "hbmgui",
+    "hexagui",
+    "lineardelta",
+    "maho600gui",
+    "max5gui",
+    "melfagui",
+    "millturngui",
+    "puma560gui",
+    "pumagui",
+    "rotarydelta",
+    "scaragui",
+    "xyzab-tdr-gui",
+    "xyzac-trt-gui",
+    "xyzbc-trt-gui",
+    "vmcgui",
+]
 GUI_PROGRAMS.update(dict.fromkeys(VISMACH_MODELS, "vismach model"))
 # our programs standing in for LinuxCNC's (theirs cannot join this HAL)
 STAND_INS = {
