@@ -30,6 +30,9 @@ SAMPLE_CONFIG_LIBRARY = [
     "simulated_home.hal",
     "util_lib.tcl",
     "wheeljogpins.tcl",
+    "xhc-hb04.tcl",
+    "xhc-hb04-layout1.cfg",
+    "xhc-hb04-layout2.cfg",
 ]
 
 
