@@ -86,6 +86,8 @@ def first_error(log: str) -> str:
     for line in reversed(lines):
         if _PROGRESS.match(line) or "(see the message above)" in line:
             continue
+        if re.search(r": exit \d+$", line):  # a Tcl file's exit: its reason came before
+            continue
         if "warning" in line.lower() or "skipping" in line:
             continue
         return line
