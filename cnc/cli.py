@@ -19,7 +19,9 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "hal": ("hal.tools:main", "HAL tools (watch|sample|stream)"),
     "run": ("cnc.launcher:main", "start a machine from an INI file, like linuxcnc"),
     "top": ("cnc.ui.top:main", "live status view of the running machine, like linuxcnctop"),
-    "sh": ("cnc.ui.sh:main", "command shell and script runner, like linuxcncrsh"),
+    "sh": ("cnc.ui.sh:main", "local command shell and script runner"),
+    "rsh": ("cnc.ui.rsh:main", "LinuxCNC's remote shell, a TCP server (linuxcncrsh, port 5007)"),
+    "haltcl": ("hal.haltcl:main", "run a Tcl HAL file, like haltcl (-i INI FILE [ARGS])"),
     "ui": ("cnc.ui.web.server:main", "operator UI in the browser (ui web [INI] [--host --port])"),
 }
 

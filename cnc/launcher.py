@@ -24,8 +24,10 @@ import signal
 import subprocess
 import sys
 import time
+from dataclasses import dataclass, field
 from pathlib import Path
 
+from cnc.atomicfile import atomic_write_text
 from cnc.ini import IniError, IniFile
 from cnc.runtime import (
     claim_instance,
@@ -47,17 +49,36 @@ READY_TIMEOUT_S = 20.0
 PR_SET_PDEATHSIG = 1
 # [DISPLAY]DISPLAY values that are our own user interfaces (anything else is run as given)
 OUR_DISPLAYS = {"top": ["top"], "sh": ["sh"], "web": ["ui", "web"]}
+LINUXCNC_VERSION = "2.9"  # exported as LINUXCNCVERSION: the LinuxCNC this one follows
 
 
 class LaunchError(Exception):
     """A start-up step failed; the message says which and why."""
 
 
+@dataclass
+class LaunchOptions:
+    """``linuxcnc``'s options that change how a machine starts (``cnc run -h``)."""
+
+    is_keep_going: bool = False  # -k: go on past errors in HAL files
+    is_verbose: bool = False  # -v: say what each HAL command did
+    is_debug: bool = False  # -d: also echo each HAL command
+    hal_dirs: list[str] = field(default_factory=list)  # -H: searched first for HAL files
+    tpmod: str = ""  # -t: instead of [TRAJ]TPMOD
+    homemod: str = ""  # -m: instead of [EMCMOT]HOMEMOD
+    display_args: list[str] = field(default_factory=list)  # after the INI: to the display
+
+
 class Launcher:
-    def __init__(self, ini_path: str, is_headless: bool = False) -> None:
-        self.ini_path = str(Path(ini_path).resolve())
+    def __init__(
+        self, ini_path: str, is_headless: bool = False, options: LaunchOptions | None = None
+    ) -> None:
+        # absolute, but not through symlinks: relative paths in the INI are relative to
+        # the folder it was named in, as LinuxCNC's launcher sees it (`pwd`/name)
+        self.ini_path = os.path.abspath(os.path.expanduser(ini_path))
         self.folder = Path(self.ini_path).parent
         self.is_headless = is_headless
+        self.options = options or LaunchOptions()
         self.ini = IniFile.load(self.ini_path)
         self.nml: Nml | None = None
         self.host: subprocess.Popen[bytes] | None = None
@@ -94,12 +115,13 @@ class Launcher:
         self.outbox = Outbox(self.nml[EMC_ERROR])
         os.environ["CNC_NML_FILE"] = nml_file
         os.environ["CNC_INI_FILE"] = self.ini_path
+        os.environ.update(self._linuxcnc_environment(nml_file))
         # replaceable trajectory planner and homing modules, read by motmod (ARCH-008)
-        for section, key, env in (
-            ("TRAJ", "TPMOD", "CNC_TPMOD"),
-            ("EMCMOT", "HOMEMOD", "CNC_HOMEMOD"),
+        for section, key, env, override in (
+            ("TRAJ", "TPMOD", "CNC_TPMOD", self.options.tpmod),
+            ("EMCMOT", "HOMEMOD", "CNC_HOMEMOD", self.options.homemod),
         ):
-            value = (self.ini.find(section, key) or "").strip()
+            value = override or (self.ini.find(section, key) or "").strip()
             if value:
                 os.environ[env] = value
         self._start_host()
@@ -119,19 +141,18 @@ class Launcher:
         if halui:  # before the HAL files, which may net its pins (as LinuxCNC starts it)
             say(f"starting {halui}")
             self._halcmd("loadusr", "-Wn", "halui", halui, "-ini", self.ini_path)
-        for hal_file in self.ini.findall("HAL", "HALFILE"):
-            self._run_hal_file(hal_file)
+        self._run_hal_files()
         for line in self.ini.findall("HAL", "HALCMD"):
             self._halcmd(*shlex.split(line))
         self._halcmd("start")  # the threads run from now on, as LinuxCNC starts them here
         self._start_task()
         self._start_display()
-        postgui_files = self.ini.findall("HAL", "POSTGUI_HALFILE")
-        if postgui_files:
-            self._wait_for_display_pins()
-        for hal_file in postgui_files:
-            self._run_hal_file(hal_file)
+        if self._display_name() == "web" and self.display is not None:
+            # LinuxCNC's GUIs run the POSTGUI files once their pins exist; ours does not
+            # run HAL files itself, so the launcher does it for it
+            self._run_postgui_files()
         write_runtime_info(self.ini_path, nml_file)  # scripts find it from now on
+        _remember_last_config(self.ini_path)
         say(f"machine ready ({self.ini_path})")
 
     def _remove_leftovers(self) -> None:
@@ -174,18 +195,68 @@ class Launcher:
         if line != "rtapi_app: ready":
             raise LaunchError(f"the realtime host did not start ({line or 'no answer'})")
 
-    def _run_hal_file(self, name: str) -> None:
-        path = Path(name).expanduser()
-        if not path.is_absolute():
-            path = self.folder / path
-        if not path.exists():
-            raise LaunchError(f"{self.ini_path}: [HAL] file not found: {path}")
-        if path.suffix == ".tcl":
-            raise LaunchError(f"{path}: Tcl HAL files are not supported; use halcmd syntax")
-        say(f"running {path.name}")
+    def _linuxcnc_environment(self, nml_file: str) -> dict[str, str]:
+        """What LinuxCNC's launcher exports for HAL files, Tcl scripts and GUIs."""
+        from hal.hallib import exported_environment
+
+        env = exported_environment(self.folder, self.options.hal_dirs)
+        env.update(
+            INI_FILE_NAME=self.ini_path,
+            CONFIG_DIR=str(self.folder),
+            NMLFILE=nml_file,
+            LINUXCNCVERSION=LINUXCNC_VERSION,
+            PATH=f"{self.folder / 'bin'}{os.pathsep}{os.environ.get('PATH', '')}",
+        )
+        for section, key, name in (
+            ("TRAJ", "COORDINATES", "TRAJ_COORDINATES"),
+            ("KINS", "KINEMATICS", "KINS_KINEMATICS"),
+        ):
+            value = self.ini.find(section, key)
+            if value is not None:
+                env[name] = value
+        return env
+
+    def _run_hal_files(self) -> None:
+        """[HAL]HALFILE entries: found as LinuxCNC finds them, .hal by halcmd, .tcl by Tcl,
+        in two passes with [HAL]TWOPASS (cnc.halfiles)."""
+        from cnc.halfiles import find_halfiles, run_halfiles
+        from hal.core import HalError
+
+        try:
+            halfiles = find_halfiles(self.ini, self.folder, self.options.hal_dirs)
+        except HalError as exc:
+            raise LaunchError(str(exc)) from None
+        if not halfiles:
+            return
         self.is_hal_loaded = True
-        if self._hal().run_file(str(path)):
-            raise LaunchError(f"{path} failed (see the message above)")
+        try:
+            twopass = (self.ini.find("HAL", "TWOPASS") or "").strip()
+            is_ok = run_halfiles(self._hal(), self.ini, halfiles, say=say, twopass=twopass)
+        except HalError as exc:  # no Tcl for a .tcl file
+            raise LaunchError(str(exc)) from None
+        if not is_ok and not self.options.is_keep_going:
+            raise LaunchError("a HAL file failed (see the message above)")
+
+    def _run_postgui_files(self) -> None:
+        """[HAL]POSTGUI_HALFILE entries, then [HAL]POSTGUI_HALCMD lines (GUI-016)."""
+        from cnc.halfiles import run_halfiles
+        from hal.core import HalError
+        from hal.hallib import find_halfile
+
+        entries = self.ini.entries("HAL", "POSTGUI_HALFILE")
+        commands = self.ini.findall("HAL", "POSTGUI_HALCMD")
+        if not entries and not commands:
+            return
+        self._wait_for_display_pins()
+        try:
+            halfiles = [find_halfile(e.value, self.folder, self.options.hal_dirs) for e in entries]
+        except HalError as exc:
+            raise LaunchError(f"[HAL]POSTGUI_HALFILE: {exc}") from None
+        is_ok = run_halfiles(self._hal(), self.ini, halfiles, say=say)
+        if not is_ok and not self.options.is_keep_going:
+            raise LaunchError("a POSTGUI_HALFILE failed (see the message above)")
+        for line in commands:
+            self._halcmd(*shlex.split(line))
 
     def _halcmd(self, *words: str) -> None:
         """One halcmd command in this process's halcmd session (it prints file:line errors)."""
@@ -197,10 +268,18 @@ class Launcher:
         """The launcher's halcmd session, with ``[SECTION]KEY`` taken from the INI; made
         once the realtime host runs (a halcmd process per step costs ~0.3 s each)."""
         if self.hal_session is None:
-            from hal.halcmd import HalCmd
+            from cnc.halfiles import LauncherHalCmd
+            from hal.halcmd import VERBOSITY_ERRORS, VERBOSITY_INFO
 
             os.chdir(self.folder)  # HAL files name their files relative to the config
-            self.hal_session = HalCmd(ini=self.ini)
+            is_verbose = self.options.is_verbose or self.options.is_debug
+            self.hal_session = LauncherHalCmd(
+                ini=self.ini,
+                is_headless=self.is_headless or not self._display_name(),
+                is_keep_going=self.options.is_keep_going,
+                verbosity=VERBOSITY_INFO if is_verbose else VERBOSITY_ERRORS,
+            )
+            self.hal_session.is_echo = self.options.is_debug
             self.hal_session.child_setup = die_with_parent  # loadusr'd programs (iocontrol)
         return self.hal_session
 
@@ -221,23 +300,28 @@ class Launcher:
                 raise LaunchError(f"task did not publish its status within {READY_TIMEOUT_S} s")
             time.sleep(0.01)
 
+    def _display_name(self) -> str:
+        """[DISPLAY]DISPLAY's program, "" for none."""
+        words = (self.ini.find("DISPLAY", "DISPLAY") or "").split()
+        return words[0] if words else ""
+
     def _start_display(self) -> None:
         display = (self.ini.find("DISPLAY", "DISPLAY") or "").strip()
         if self.is_headless or not display:
             say("no display (headless): stop with Ctrl-C or SIGTERM")
             return
-        words = shlex.split(display)
+        words = [*shlex.split(display), *self.options.display_args]
         if words[0] in OUR_DISPLAYS:
-            command = [
-                sys.executable,
-                "-m",
-                "cnc",
-                *OUR_DISPLAYS[words[0]],
-                *words[1:],
-                self.ini_path,
-            ]
-        else:
-            command = [*words, "-ini", self.ini_path]  # as LinuxCNC starts its GUIs
+            command = [sys.executable, "-m", "cnc", *OUR_DISPLAYS[words[0]], *words[1:]]
+            command.append(self.ini_path)
+        elif words[0] == "linuxcncrsh":  # LinuxCNC's remote shell: ours, same arguments
+            command = [sys.executable, "-m", "cnc", "rsh", *words[1:], "--", "-ini"]
+            command.append(self.ini_path)
+        elif words[0] == "dummy":  # LinuxCNC's placeholder display: runs until Enter
+            print("DUMMY DISPLAY MODULE, press <ENTER> to continue.", flush=True)
+            command = [sys.executable, "-c", "import sys; sys.stdin.readline()"]
+        else:  # as LinuxCNC starts its GUIs: the INI first, then the display's arguments
+            command = [words[0], "-ini", self.ini_path, *words[1:]]
         say(f"starting the display: {' '.join(words)}")
         try:
             self.display = subprocess.Popen(command, cwd=self.folder)
@@ -262,6 +346,13 @@ class Launcher:
             raise LaunchError(f"the display's HAL pins: {exc}") from None
 
     # ------------------------------------------------------------------ running
+    def display_status(self) -> int | None:
+        """The display's exit status once it has exited (``cnc run`` exits with it, as
+        ``linuxcnc`` does), else None."""
+        if self.display is None:
+            return None
+        return self.display.poll()
+
     def wait(self) -> int:
         """Until the display exits, a signal arrives, or task or the host dies. Every
         process the launcher started is watched: one that ends while the machine runs is
@@ -430,14 +521,89 @@ def _exit_description(returncode: int) -> str:
     return f"exited with status {returncode}"
 
 
-def main(argv: list[str]) -> int:
-    parser = argparse.ArgumentParser(prog="cnc run", description=__doc__.split("\n\n")[0])
-    parser.add_argument("ini", help="the machine's INI file")
+def _last_config_file() -> Path:
+    base = os.environ.get("XDG_CONFIG_HOME") or os.path.expanduser("~/.config")
+    return Path(base) / "cnc" / "last-config"
+
+
+def _remember_last_config(ini_path: str) -> None:
+    """For ``cnc run -l``: the INI file of the last machine started."""
+    with contextlib.suppress(OSError):
+        path = _last_config_file()
+        path.parent.mkdir(parents=True, exist_ok=True)
+        atomic_write_text(path, ini_path + "\n")
+
+
+def last_config() -> str | None:
+    """``-l``: the last INI file started here, else LinuxCNC's (``~/.linuxcncrc``
+    ``[PICKCONFIG]LAST_CONFIG``, written by its configuration picker)."""
+    with contextlib.suppress(OSError):
+        return _last_config_file().read_text().strip() or None
+    with contextlib.suppress(OSError, IniError):
+        return IniFile.load(os.path.expanduser("~/.linuxcncrc")).find("PICKCONFIG", "LAST_CONFIG")
+    return None
+
+
+def parse_arguments(argv: list[str]) -> tuple[argparse.Namespace, LaunchOptions]:
+    """``linuxcnc``'s command line: options, then the INI file, then arguments for the
+    display (LinuxCNC's EXTRA_ARGS)."""
+    parser = argparse.ArgumentParser(
+        prog="cnc run",
+        description=__doc__.split("\n\n")[0],
+        epilog="Options are LinuxCNC's: linuxcnc [options] INI becomes cnc run [options] INI.",
+    )
     parser.add_argument("--headless", action="store_true", help="run without [DISPLAY]DISPLAY")
+    parser.add_argument("-d", dest="is_debug", action="store_true", help="debug: echo HAL commands")
+    parser.add_argument("-v", dest="is_verbose", action="store_true", help="verbose HAL commands")
+    parser.add_argument(
+        "-r", dest="is_runtests", action="store_true", help="accepted (output is never redirected)"
+    )
+    parser.add_argument("-l", dest="is_last", action="store_true", help="the last INI file used")
+    parser.add_argument(
+        "-k", dest="is_keep_going", action="store_true", help="go on past HAL errors"
+    )
+    parser.add_argument(
+        "-H",
+        dest="hal_dirs",
+        action="append",
+        default=[],
+        metavar="DIR",
+        help="search DIR for HAL files first (repeatable)",
+    )
+    parser.add_argument("-t", dest="tpmod", default="", help="trajectory planner module")
+    parser.add_argument("-m", dest="homemod", default="", help="homing module")
+    parser.add_argument("ini", nargs="?", help="the machine's INI file ('-': the last one)")
+    parser.add_argument("display_args", nargs=argparse.REMAINDER, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
+    if "--headless" in args.display_args:  # also accepted after the INI file
+        args.display_args.remove("--headless")
+        args.headless = True
+    for folder in args.hal_dirs:
+        if not os.path.isdir(folder):
+            parser.error(f"-H {folder}: not a folder")
+    options = LaunchOptions(
+        is_keep_going=args.is_keep_going,
+        is_verbose=args.is_verbose,
+        is_debug=args.is_debug,
+        hal_dirs=[os.path.abspath(d) for d in reversed(args.hal_dirs)],  # the last -H first
+        tpmod=args.tpmod,
+        homemod=args.homemod,
+        display_args=args.display_args,
+    )
+    if args.is_last or args.ini == "-":
+        args.ini = last_config()
+        if args.ini is None:
+            parser.error("-l: no INI file was used before")
+    elif args.ini is None:
+        parser.error("the INI file is required (or -l for the last one used)")
+    return args, options
+
+
+def main(argv: list[str]) -> int:
+    args, options = parse_arguments(argv)
     protect_output()  # `cnc run ... | head` must not kill the machine when head exits
     try:
-        launcher = Launcher(args.ini, is_headless=args.headless)
+        launcher = Launcher(args.ini, is_headless=args.headless, options=options)
     except IniError as exc:
         say(str(exc))
         return 1
@@ -451,6 +617,9 @@ def main(argv: list[str]) -> int:
     try:
         launcher.start()
         status = launcher.wait()
+        display_status = launcher.display_status()
+        if display_status is not None:  # the display ended the run: its status is ours
+            status = display_status
     except (LaunchError, NmlError, IniError) as exc:
         say(str(exc))
     finally:

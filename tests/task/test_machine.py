@@ -380,7 +380,7 @@ def test_after_homing_a_ui_jogs_axes_in_teleop_mode(machine: Machine) -> None:
             lambda f: (f / "mill.ini").write_text(
                 (f / "mill.ini").read_text().replace("HALFILE = mill.hal", "HALFILE = gone.hal")
             ),
-            "[HAL] file not found",
+            "[HAL]HALFILE: HAL file 'gone.hal' not found",
         ),
         (
             lambda f: (f / "mill.ini").write_text(
