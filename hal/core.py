@@ -50,7 +50,7 @@ TYPES_BY_NAME = {name: code for code, name in TYPE_NAMES.items()}
 DIR_NAMES = {HAL_IN: "IN", HAL_OUT: "OUT", HAL_IO: "I/O", HAL_RO: "RO", HAL_RW: "RW"}
 DIRS_BY_NAME = {"in": HAL_IN, "out": HAL_OUT, "io": HAL_IO, "ro": HAL_RO, "rw": HAL_RW}
 
-HAL_NAME_LEN = 41
+HAL_NAME_LEN = 47  # LinuxCNC 2.9 hal.h
 NSLOTS = 1 << 17
 HEADER_BYTES = 64
 DATA_BYTES = HEADER_BYTES + NSLOTS * 4 + NSLOTS * 8

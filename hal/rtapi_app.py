@@ -223,6 +223,7 @@ class LoadedModule:
     def __init__(self, name: str, comp: str, instances: list[Any], functs: list[str]) -> None:
         self.name, self.comp, self.instances, self.functs = name, comp, instances, functs
         self.args = ""
+        self.exit: Callable[[], None] | None = None  # a module's rtapi_app_exit, bound
 
 
 class Host:
@@ -414,6 +415,8 @@ class Host:
         else:
             raise HalError(f"{name}: not a HAL component (no COMPONENT or rtapi_app_main)")
         loaded.args = " ".join(words)
+        if hasattr(module, "rtapi_app_exit"):  # LinuxCNC's unload hook of such modules
+            loaded.exit = lambda: module.rtapi_app_exit(self, comp_name)
         self.modules[comp_name] = loaded
         self.hal.ready(comp_name)
 
@@ -509,12 +512,17 @@ class Host:
             raise HalError(f"component '{name}' not loaded")
         loaded = self.modules.pop(name)
         self._remove(name)
-        if loaded.instances and self.threads:
+        if (loaded.instances or loaded.exit) and self.threads:
             # let every thread finish its current period before the instances go away
             time.sleep(2 * max(t.period for t in self.threads.values()) / 1e9)
         for inst in loaded.instances:
             try:
                 inst.teardown()
+            except Exception:
+                traceback.print_exc()
+        if loaded.exit is not None:
+            try:
+                loaded.exit()
             except Exception:
                 traceback.print_exc()
 

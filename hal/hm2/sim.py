@@ -122,6 +122,7 @@ class SimBoard:
         self.is_mute = False
         self.rx_packets = 0
         self.answers = 0
+        self.answers_due = 0
         self.parse_errors = 0
         self.timer_space = bytearray(64)
         self._read_hooks: dict[int, Callable[[], int]] = {}
@@ -223,7 +224,7 @@ class SimBoard:
     def bite(self) -> None:
         """The watchdog bites: status bit 0, and every pin an input."""
         self.wd_status |= 1
-        self.port_ddr = [0] * len(self.port_ddr)
+        self.port_ddr[:] = [0] * len(self.port_ddr)  # in place: the register hooks hold it
 
     @property
     def has_bit(self) -> bool:
@@ -508,9 +509,10 @@ class SimBoard:
 
     def should_answer(self) -> bool:
         """Fault injection: whether the next answer goes out."""
+        self.answers_due += 1
         if self.is_mute:
             return False
-        if self.drop_one_in and self.rx_packets % self.drop_one_in == 0:
+        if self.drop_one_in and self.answers_due % self.drop_one_in == 0:
             return False
         self.answers += 1
         return True

@@ -89,7 +89,7 @@ def test_errors_name_file_line_and_cause(tmp_path: Path) -> None:
             "Signal 'a' can not add OUT pin 'or2.0.out', it already has OUT pin 'and2.0.out'"
         ),
         "loadrt and2\nnewsig f float\nnet f and2.0.in0\n": "type mismatch 'and2.0.in0' <- 'f'",
-        "newsig " + "x" * 42 + " bit\n": "is too long",
+        "newsig " + "x" * 48 + " bit\n": "is too long",
         "setp and2.0.in0 1\n": "parameter or pin 'and2.0.in0' not found",
         "frobnicate\n": "Unknown command 'frobnicate'",
         "loadrt and2\nsetp and2.0.out 1\n": "pin 'and2.0.out' is not writable",
