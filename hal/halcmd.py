@@ -64,6 +64,11 @@ USERSPACE_TOOLS = {
     "halsampler": [sys.executable, "-m", "cnc", "hal", "sample"],
     "halstreamer": [sys.executable, "-m", "cnc", "hal", "stream"],
     "halui": [sys.executable, "-m", "cnc.halui"],
+    "mb2hal": [sys.executable, "-m", "hal.modbus.mb2hal"],
+    "hy_vfd": [sys.executable, "-m", "hal.modbus.hy_vfd"],
+    # simulated hardware for the sim configs (not LinuxCNC programs)
+    "hm2_sim": [sys.executable, "-m", "hal.hm2.sim"],
+    "hy_vfd_sim": [sys.executable, "-m", "hal.modbus.vfd_sim"],
 }
 
 

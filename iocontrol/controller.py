@@ -56,6 +56,7 @@ REPUBLISH_S = 0.5
 # A braking E-stop opens the E-stop chain at the latest this long after it was asked for
 # (motion brakes for at most BRAKE_TIMEOUT_S, then asks for the immediate one).
 BRAKE_FALLBACK_S = BRAKE_TIMEOUT_S + 1.0
+ESTOP_CHAIN_SETTLE_S = 0.1  # how long an E-stop reset waits for the chain to close
 
 # LinuxCNC's pins (io(1)): name, type, direction.
 PINS = (
@@ -459,9 +460,17 @@ class IoControl:
 
     def _estop_off(self, msg: emc.EMC_AUX_ESTOP_OFF) -> None:
         """Allow enabling: user-enable-out true and a one-cycle user-request-enable pulse,
-        the rising edge that resets an external e-stop latch (IO-016)."""
+        the rising edge that resets an external e-stop latch (IO-016). An E-stop chain
+        through realtime components (estop_latch, a card's watchdog) closes a servo period
+        or two later: wait for emc-enable-in that long before reporting."""
         self.is_user_enabled = True
         self._pulse_request_enable()
+        self._write_outputs()
+        deadline = time.monotonic() + ESTOP_CHAIN_SETTLE_S
+        while self.comp is not None and not self.comp["emc-enable-in"]:
+            if time.monotonic() >= deadline:
+                break
+            time.sleep(0.001)
 
     def _estop_reset(self, msg: emc.EMC_AUX_ESTOP_RESET) -> None:
         """A further reset request for the external latch; LinuxCNC 2.9 ignores it."""

@@ -153,6 +153,12 @@ class Board:
         self.board_pins = BoardPins.create(hal, comp, self.name)
         self._make_functions(config)
         self.out = [0] * self.write_words
+        self.settings_checks = [
+            check
+            for function in (self.ioport, *self.functions)
+            for check in function.settings_checks()
+        ]
+        self.next_check = 0
         self._make_write_packet()
         self.link.set_read_regions(self.read_regions)
         self.force_write()
@@ -402,12 +408,12 @@ class Board:
             self.ioport.prepare_write(out, period)
         for function in self.functions:
             function.prepare_write(out, period)
-        if self.ioport:
-            self.ioport.write_changes(period)
         if self.watchdog:
             self.watchdog.write_changes(period)
-        for function in self.functions:
-            function.write_changes(period)
+        checks = self.settings_checks
+        if checks:  # one settings check per period, in turn
+            self.next_check = (self.next_check + 1) % len(checks)
+            checks[self.next_check](period)
         try:
             self.link.send_writes(self._packet())
         except OSError as exc:

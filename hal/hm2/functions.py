@@ -65,6 +65,12 @@ class Function:
     def write_changes(self, period: int) -> None:
         """Queue writes of settings whose parameters changed since last written."""
 
+    def settings_checks(self) -> list:
+        """The checks for changed settings, each cheap: the board runs one per period in
+        turn (a parameter change takes effect within a few periods, and no period pays
+        for checking them all)."""
+        return [self.write_changes]
+
     def force_write(self) -> None:
         """Queue every setting (start-up, recovery after a watchdog bite)."""
 
@@ -166,11 +172,46 @@ class IOPort(Function):
         if registers != self.written:
             self._queue(registers)
 
+    def settings_checks(self) -> list:
+        return [lambda period, p=port: self._check_port(p) for port in range(self.ports)]
+
+    def _check_port(self, port: int) -> None:
+        """Whether one port's direction, open-drain or inversion parameters changed."""
+        width, board = self.width, self.board
+        ddr = od = inv = 0
+        for io in range(port * width, min((port + 1) * width, len(board.pin_owner))):
+            mask = 1 << (io - port * width)
+            full = self.full.get(io)
+            if full is not None and full.is_output:
+                ddr |= mask
+            params = self.outputs.get(io)
+            if params is not None:
+                if params.is_opendrain:
+                    od |= mask
+                if params.invert_output:
+                    inv |= mask
+        written = self.written
+        if written is None:
+            return
+        module_ddr = self.module_ddr[port]
+        if (ddr | module_ddr, od, inv) != (written[0][port], written[2][port], written[3][port]):
+            self.write_changes(0)
+
     def force_write(self) -> None:
         self._queue(self._registers())
 
     def _queue(self, registers: tuple[tuple[int, ...], ...]) -> None:
         ddr, alt, od, inv = registers
+        self.module_ddr = [
+            sum(
+                1 << bit
+                for bit in range(self.width)
+                if port * self.width + bit < len(self.board.pin_owner)
+                and self.board.pin_owner[port * self.width + bit] is not None
+                and self.board.pin_is_output[port * self.width + bit]
+            )
+            for port in range(self.ports)
+        ]
         for register, words in ((1, ddr), (2, alt), (3, od), (4, inv)):
             self.board.queue_write(self.address(register), list(words))
         self.written = registers
@@ -469,10 +510,17 @@ class StepGen(Function):
 
     def write_changes(self, period: int) -> None:
         for i in range(self.count):
-            settings = self._settings(i)
-            if settings != self.states[i].written:
-                self._queue(i, settings)
+            self._check(i)
         self._write_timer(is_forced=False)
+
+    def _check(self, index: int) -> None:
+        settings = self._settings(index)
+        if settings != self.states[index].written:
+            self._queue(index, settings)
+
+    def settings_checks(self) -> list:
+        checks = [lambda period, i=i: self._check(i) for i in range(self.count)]
+        return [*checks, lambda period: self._write_timer(is_forced=False)]
 
     def force_write(self) -> None:
         for i in range(self.count):
@@ -636,13 +684,24 @@ class Encoder(Function):
             pins.velocity = velocity
             pins.velocity_rpm = velocity * 60.0
 
-    def write_changes(self, period: int) -> None:
+    def prepare_write(self, out: list[int], period: int) -> None:
+        """``index-enable`` is looked at every period (homing to an index, spindle sync)."""
         for i, pins in enumerate(self.instances):
-            control = self._control(i)
-            if control != self.states[i].written:
-                self.board.queue_write(self.address(1, i), [control])
-                self.states[i].written = control
-                self.states[i].index_armed = bool(pins.index_enable)
+            state = self.states[i]
+            if bool(pins.index_enable) != state.index_armed and state.written is not None:
+                self._write_control(i)
+
+    def _write_control(self, index: int) -> None:
+        control = self._control(index)
+        state = self.states[index]
+        self.board.queue_write(self.address(1, index), [control])
+        state.written = control
+        state.index_armed = bool(self.instances[index].index_enable)
+
+    def write_changes(self, period: int) -> None:
+        for i in range(self.count):
+            if self._control(i) != self.states[i].written:
+                self._write_control(i)
         sample = self.module_pins.sample_frequency
         if sample != self.written_sample:
             self._write_filter(sample)

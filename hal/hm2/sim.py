@@ -70,6 +70,7 @@ MASK32 = 0xFFFFFFFF
 WATCHDOG_DISABLED = 0x80000000
 WATCHDOG_PET_COOKIE = 0x5A
 IDLE_TICK_S = 0.002  # the model advances (watchdog bites) even when no packet comes
+FIELD_SYNC_NS = 1_000_000  # how often the HAL pins of the connectors are updated
 SIM_PRIORITY = 80  # SCHED_FIFO, under the realtime host's (99 and down)
 BOARD_MAC = bytes((0x00, 0x60, 0x1B, 0x96, 0x00, 0x01))  # Mesa's prefix, a made-up rest
 
@@ -80,6 +81,7 @@ class SimBoard:
     def __init__(self, firmware: Firmware, clock: Callable[[], int] = time.monotonic_ns) -> None:
         self.firmware = firmware
         self.clock = clock
+        self._levels: dict[int, int] = {}  # port -> pin levels, for the current datagram
         idrom = firmware.idrom
         self.modules = {md.gtag: Module.resolve(md, idrom) for md in firmware.modules}
         self.num_pins = idrom.io_width
@@ -223,6 +225,7 @@ class SimBoard:
 
     def bite(self) -> None:
         """The watchdog bites: status bit 0, and every pin an input."""
+        self._levels.clear()
         self.wd_status |= 1
         self.port_ddr[:] = [0] * len(self.port_ddr)  # in place: the register hooks hold it
 
@@ -331,6 +334,7 @@ class SimBoard:
 
     def set_field_inputs(self, levels: list[bool]) -> None:
         """What the field drives on every pin (a pin that is an output ignores it)."""
+        self._levels.clear()
         ports = [0] * len(self.field_ports)
         width = self.port_width
         for io, level in enumerate(levels):
@@ -357,7 +361,16 @@ class SimBoard:
         return value
 
     def port_levels(self, port: int) -> int:
-        """The levels of a port's pins: outputs as driven, inputs as the field drives."""
+        """The levels of a port's pins: outputs as driven, inputs as the field drives
+        (worked out once per datagram: ``handle`` clears the cache)."""
+        cached = self._levels.get(port)
+        if cached is not None:
+            return cached
+        levels = self._port_levels(port)
+        self._levels[port] = levels
+        return levels
+
+    def _port_levels(self, port: int) -> int:
         ddr = self.port_ddr[port]
         field = self.field_ports[port]
         alt = self.port_alt[port]
@@ -365,6 +378,9 @@ class SimBoard:
         driven ^= self.port_invert[port]
         released = self.port_open_drain[port] & driven  # open drain high: the field decides
         return (ddr & driven & ~released) | (ddr & released & field) | (~ddr & field)
+
+    def _forget_levels(self) -> None:
+        self._levels.clear()
 
     def is_output(self, io: int) -> bool:
         port, bit = divmod(io, self.port_width)
@@ -412,6 +428,7 @@ class SimBoard:
         """Run one datagram; the answer (the data of its reads) or None."""
         self.rx_packets += 1
         self.advance()
+        self._levels.clear()
         try:
             commands = lbp16.parse(datagram)
         except lbp16.Lbp16Error:
@@ -499,6 +516,7 @@ class SimBoard:
         return value if value is not None else self.regs.get(address, 0)
 
     def write_register(self, address: int, value: int) -> None:
+        self._levels.clear()
         if address in self.static:
             return  # the IDROM is read-only
         hook = self._write_hooks.get(address)
@@ -532,26 +550,26 @@ class SimServer:
 
     def serve_forever(self) -> None:
         board, sock, field = self.board, self.sock, self.field
+        next_sync = 0
         while not self.is_stopping:
             try:
                 datagram, peer = sock.recvfrom(2048)
             except TimeoutError:
                 board.advance()
-                if field:
-                    field.publish()
-                continue
             except OSError:
                 if self.is_stopping:
                     return
                 raise
-            if field:
+            else:
+                answer = board.handle(datagram)
+                if answer is not None and board.should_answer():
+                    with contextlib.suppress(OSError):  # the host went away: keep serving
+                        sock.sendto(answer, peer)
+            # the connectors, once a ms, after answering (the host is waiting for answers)
+            if field and time.monotonic_ns() >= next_sync:
                 field.take_inputs()
-            answer = board.handle(datagram)
-            if answer is not None and board.should_answer():
-                with contextlib.suppress(OSError):  # the host went away: keep serving
-                    sock.sendto(answer, peer)
-            if field:
                 field.publish()
+                next_sync = time.monotonic_ns() + FIELD_SYNC_NS
 
     def close(self) -> None:
         self.is_stopping = True
@@ -605,6 +623,7 @@ class FieldPins:
         self.has_bit = comp.newpin("watchdog.has-bit", HAL_BIT, HAL_OUT)
         self.drop_one_in = comp.newpin("drop-one-in", HAL_U32, HAL_IN)
         self.is_mute = comp.newpin("is-mute", HAL_BIT, HAL_IN)
+        self.published = [(-1, -1)] * len(board.port_ddr)  # (levels, directions) per port
         comp.ready()
 
     def take_inputs(self) -> None:
@@ -617,10 +636,21 @@ class FieldPins:
         board.is_mute = self.is_mute.get()
 
     def publish(self) -> None:
+        """The board's side of the connectors; pins are written only when they change."""
         board = self.board
-        for io in range(board.num_pins):
-            self.io_out[io].set(board.pin_out(io))
-            self.io_is_output[io].set(board.is_output(io))
+        width = board.port_width
+        for port in range(len(board.port_ddr)):
+            levels, ddr = board.port_levels(port), board.port_ddr[port]
+            old_levels, old_ddr = self.published[port]
+            changed = (levels ^ old_levels) | (ddr ^ old_ddr)
+            if not changed:
+                continue
+            self.published[port] = (levels, ddr)
+            for bit in range(width):
+                io = port * width + bit
+                if io < board.num_pins and changed >> bit & 1:
+                    self.io_out[io].set(bool(levels >> bit & 1))
+                    self.io_is_output[io].set(bool(ddr >> bit & 1))
         for i, (position, rate) in enumerate(self.step):
             position.set(board.step_position(i))
             rate.set(board.step_rate_hz(i))

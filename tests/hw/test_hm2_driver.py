@@ -19,6 +19,7 @@ from hal.hm2.idrom import GTAG_INM, GTAG_STEPGEN
 from tests.hw.conftest import FakeClock, Served, serve
 
 PERIOD = 1_000_000
+SETTLE = 20  # periods for a changed setting to reach the board (one check per period)
 NAME = "hm2_7i96s.0"
 
 
@@ -103,10 +104,10 @@ def test_stepgen_feedback_follows_the_command_and_the_motor(rig: Rig) -> None:
 def test_gpio_outputs_reach_the_pins_and_inputs_come_back(rig: Rig) -> None:
     rig.set("gpio.040.is_output", True)
     rig.set("gpio.040.out", True)
-    rig.run(2)
+    rig.run(SETTLE)
     assert rig.sim.is_output(40) and rig.sim.pin_out(40)
     rig.set("gpio.040.invert_output", True)
-    rig.run(2)
+    rig.run(SETTLE)
     assert not rig.sim.pin_out(40)
     levels = [rig.sim.field_in(io) for io in range(51)]
     levels[3] = True  # TB3 input 3 switched on
