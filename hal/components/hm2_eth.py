@@ -19,7 +19,6 @@ bite, so its outputs go off.
 
 from __future__ import annotations
 
-import os
 from typing import Any
 
 from hal.api import RtComponent, param, pin
@@ -28,6 +27,7 @@ from hal.hm2.driver import Board, ConfigError, LowLevel, parse_config
 from hal.hm2.eth import EthLink, LinkError
 from hal.hm2.firmware import SEVEN_I96S
 from hal.hm2.idrom import IdromError
+from hal.operator_messages import operator_channel
 
 # Boards by their LBP16 name: (HAL name, I/O ports, pins per port, LEDs, connector names).
 BOARDS = {
@@ -78,27 +78,6 @@ class EthBoard:
         self.board.write(period)
 
 
-def _operator_channel() -> Any:
-    """Where faults are told to the operator: the machine's error channel when one runs
-    (the launcher names the NML file), written without ever waiting."""
-    nml_file = os.environ.get("CNC_NML_FILE")
-    if not nml_file:
-        return None
-    try:
-        from nml import emc
-        from nml.channels import EMC_ERROR, Nml, load_config
-
-        nml = Nml(load_config(nml_file), "motion", [EMC_ERROR])
-    except Exception:
-        return None
-
-    def tell(text: str) -> None:
-        message = emc.EMC_OPERATOR_ERROR(error=emc.fit_text(text))
-        nml[EMC_ERROR].write(message, is_oldest_dropped=True)
-
-    return tell
-
-
 def _split(value: str) -> list[str]:
     return [part.strip() for part in value.split(",")] if value else []
 
@@ -116,7 +95,7 @@ def rtapi_app_main(host: Any, comp: str, args: dict[str, str]) -> None:
     print("hm2_eth: loading Mesa AnyIO HostMot2 ethernet driver version 0.2 (cnc)", flush=True)
     boards: list[EthBoard] = []
     counts: dict[str, int] = {}
-    tell = _operator_channel()
+    tell = operator_channel("motion")  # the servo thread writes it: never blocks
     try:
         for n, ip in enumerate(ips):
             boards.append(_open_board(host, comp, ip, configs[n] if n < len(configs) else "",
