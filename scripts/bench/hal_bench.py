@@ -30,7 +30,6 @@ import argparse
 import gc
 import itertools
 import json
-import multiprocessing
 import os
 import shutil
 import subprocess
@@ -45,6 +44,14 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 from hal.api import set_shared_hal
 from hal.core import Hal
 from hal.halcmd import HalCmd
+from hal.latency import (  # the measuring shared with cnc latency-test
+    other_rt_threads,
+    start_load,
+    steal_ticks,
+    stop_load,
+    summary,
+)
+from hal.latency import period_starts as _period_starts
 from hal.rtapi_app import Host, default_rt_cpu, host_options_from_env
 from nml.ipcnames import INSTANCE_ENV
 
@@ -112,61 +119,6 @@ FUNCTS = [
 ]
 
 
-def summary(lateness_ns: list[int], overruns: int) -> dict[str, Any]:
-    values = sorted(lateness_ns)
-    if not values:
-        return {
-            "p50_us": None,
-            "p99_us": None,
-            "p999_us": None,
-            "max_us": None,
-            "overruns": overruns,
-            "periods": 0,
-        }
-
-    def quantile(q: float) -> float:
-        return round(values[min(len(values) - 1, int(q * (len(values) - 1)))] / 1000, 1)
-
-    return {
-        "p50_us": quantile(0.5),
-        "p99_us": quantile(0.99),
-        "p999_us": quantile(0.999),
-        "max_us": round(values[-1] / 1000, 1),
-        "overruns": overruns,
-        "periods": len(values),
-    }
-
-
-def _busy(cpu: int) -> None:
-    os.sched_setaffinity(0, {cpu})
-    while True:
-        pass
-
-
-def start_load(rt_cpu: int) -> list[multiprocessing.Process]:
-    """One busy process on every CPU but the realtime one."""
-    cpus = [cpu for cpu in range(os.cpu_count() or 1) if cpu != rt_cpu] or [rt_cpu]
-    procs = [multiprocessing.Process(target=_busy, args=(cpu,), daemon=True) for cpu in cpus]
-    for proc in procs:
-        proc.start()
-    return procs
-
-
-def stop_load(procs: list[multiprocessing.Process]) -> None:
-    for proc in procs:
-        proc.terminate()
-        proc.join()
-
-
-def steal_ticks(cpu: int) -> int:
-    """Time the hypervisor ran something else on ``cpu``'s vCPU, in USER_HZ ticks (10 ms)."""
-    for line in Path("/proc/stat").read_text().splitlines():
-        fields = line.split()
-        if fields[0] == f"cpu{cpu}":
-            return int(fields[8])
-    return 0
-
-
 def c_command(
     binary: str, seconds: float, host_options: dict[str, Any], priority: int
 ) -> list[str]:
@@ -182,51 +134,19 @@ def c_command(
     ]
 
 
+def period_starts(starts: list[tuple[int, int]], period: int = PERIOD_NS) -> list[tuple[int, int]]:
+    return _period_starts(starts, period)
+
+
 def rt_cpu(host_options: dict[str, Any]) -> int:
     cpu = host_options.get("cpu")
     return default_rt_cpu() if cpu is None else cpu
-
-
-def other_rt_threads(cpu: int) -> list[str]:
-    """SCHED_FIFO/RR threads of other processes last seen on ``cpu`` ("pid:name prio").
-
-    Other realtime hosts on the same CPU (other machines, tests) delay ours whenever their
-    priority is the same or higher: the figures mean little then.
-    """
-    found = []
-    for stat in Path("/proc").glob("[0-9]*/task/[0-9]*/stat"):
-        try:
-            text = stat.read_text()
-        except OSError:
-            continue
-        name = text[text.index("(") + 1 : text.rindex(")")]
-        fields = text[text.rindex(")") + 2 :].split()
-        # fields from 3 (state) on: processor is field 39, rt_priority 40, policy 41
-        processor, rt_priority, policy = int(fields[36]), int(fields[37]), int(fields[38])
-        pid, is_kernel = int(stat.parts[2]), fields[1] in ("0", "2")  # parent: kthreadd
-        if policy in (1, 2) and processor == cpu and pid != os.getpid() and not is_kernel:
-            found.append(f"{pid}:{name} {rt_priority}")
-    return sorted(set(found))
 
 
 def parse_c_output(text: str) -> dict[int, int]:
     """hal_latency's lines ``deadline lateness`` as {deadline: lateness} (ns)."""
     pairs = (line.split() for line in text.splitlines())
     return {int(words[0]): int(words[1]) for words in pairs if len(words) == 2}
-
-
-def period_starts(starts: list[tuple[int, int]], period: int = PERIOD_NS) -> list[tuple[int, int]]:
-    """(deadline, start) of every period, from those of the periods that ran. A period
-    skipped after an overrun is included, started at the next start: it did not run at all,
-    so it counts as that late."""
-    periods = []
-    previous = None
-    for deadline, start in starts:
-        if previous is not None:
-            periods += [(missed, start) for missed in range(previous + period, deadline, period)]
-        periods.append((deadline, start))
-        previous = deadline
-    return periods
 
 
 def measure_ours(seconds: float, is_loaded: bool, host_options: dict[str, Any]) -> dict[str, Any]:
