@@ -25,12 +25,11 @@ import struct
 import sys
 import time
 from dataclasses import dataclass
-from typing import Any
 
-from hal.api import RtComponent, param, pin
-from hal.core import Hal, HalError
-from hal.hm2 import functions
-from hal.hm2.eth import EthLink, LinkError, PacketErrors
+from hal.api import RtComponent, param
+from hal.core import Hal
+from hal.hm2 import functions, lbp16
+from hal.hm2.eth import EthLink, PacketErrors
 from hal.hm2.idrom import (
     CONFIG_NAME,
     CONFIG_NAME_ADDRESS,
@@ -305,8 +304,6 @@ class Board:
         self.queued.append((address, values))
 
     def _make_write_packet(self) -> None:
-        from hal.hm2 import lbp16
-
         parts = []
         fmt = "<"
         for address, words in self.write_regions:
@@ -321,8 +318,6 @@ class Board:
         self.write_struct = struct.Struct(fmt)
 
     def _packet(self) -> bytearray:
-        from hal.hm2 import lbp16
-
         packet = bytearray()
         out = self.out
         for header, at, words in self.write_layout:
@@ -338,8 +333,6 @@ class Board:
         """Start-up: send the settings at once, outside the periodic packets."""
         if self.queued:
             packet = bytearray()
-            from hal.hm2 import lbp16
-
             for address, values in self.queued:
                 packet += lbp16.write_hm2(address, len(values)).header()
                 packet += struct.pack(f"<{len(values)}I", *values)
@@ -460,16 +453,3 @@ class Board:
 
 def _config_key(gtag: int) -> str:
     return next((k for k, v in CONFIG_COUNTS.items() if v == gtag), f"gtag {gtag}")
-
-
-__all__ = [
-    "Board",
-    "ConfigError",
-    "HalError",
-    "IdromError",
-    "LinkError",
-    "LowLevel",
-    "parse_config",
-    "pin",
-]
-_: Any = None

@@ -79,6 +79,7 @@ class EthLink:
         self.read_count = 0
         self.write_count = 0
         self.read_template = b""
+        self.read_tail = b""
         self.read_struct = struct.Struct("<")
         self.answer_bytes = _TAIL_BYTES
         self.is_read_requested = False

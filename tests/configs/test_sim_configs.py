@@ -41,6 +41,8 @@ from tests.hal.halrun_util import REPO, run_cnc
 
 SIM = REPO / "configs" / "sim"
 CONFIGS = ["mill", "mill_switches", "mill_inch", "lathe", "gantry", "corexy", "random_tc"]
+# machines with simulated hardware (a Mesa card, a VFD): tests/hw/test_mesa_sim_e2e.py
+HARDWARE_SIMS = ["mesa_7i96s"]
 MILL_PROGRAMS = ["pocket.ngc", "drill.ngc", "toolchange.ngc"]
 PROGRAMS = {name: MILL_PROGRAMS for name in CONFIGS} | {"lathe": ["lathe_turn.ngc"]}
 # LinuxCNC's persistent parameters: G28 and G30 homes, G92, the nine coordinate systems.
@@ -79,9 +81,9 @@ def joint_float(ini: IniFile, joint: int, key: str) -> float:
 
 # --------------------------------------------------------------------------- the INI files
 def test_the_sim_folder_holds_the_advertised_machines() -> None:
-    assert sorted(p.stem for p in SIM.glob("*.ini")) == sorted(CONFIGS)
+    assert sorted(p.stem for p in SIM.glob("*.ini")) == sorted(CONFIGS + HARDWARE_SIMS)
     readme = (SIM / "README.md").read_text()
-    for name in CONFIGS:
+    for name in CONFIGS + HARDWARE_SIMS:
         assert f"{name}.ini" in readme
 
 
