@@ -18,9 +18,9 @@ from tests.hal.comp_harness import bench
 
 # loadrt arguments a module needs
 ARGS = {"sampler": "cfg=ff", "streamer": "cfg=ff", "stepgen": "step_type=0,1 ctrl_type=p,v"}
-# motmod needs a machine (tests/motion/test_rt_garbage.py covers the controller); threads
-# only makes threads
-ELSEWHERE = {"motmod", "threads"}
+# motmod needs a machine (tests/motion/test_rt_garbage.py covers the controller), hm2_eth a
+# card (tests/hw/test_hm2_driver.py); threads only makes threads
+ELSEWHERE = {"motmod", "threads", "hm2_eth"}
 COMPONENTS = sorted(
     path.stem
     for path in (Path(__file__).resolve().parents[2] / "hal" / "components").glob("*.py")
