@@ -21,6 +21,7 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "top": ("cnc.ui.top:main", "live status view of the running machine, like linuxcnctop"),
     "sh": ("cnc.ui.sh:main", "command shell and script runner, like linuxcncrsh"),
     "ui": ("cnc.ui.web.server:main", "operator UI in the browser (ui web [INI] [--host --port])"),
+    "inivar": ("cnc.ini:inivar", "print one INI value, like inivar (-var KEY -sec SECTION)"),
 }
 
 
