@@ -366,6 +366,7 @@ _SECTIONS = [
         path("LOG_FILE"),
         text("REMAP", repeat=True),
         text("ON_ABORT_COMMAND"),
+        text("WRITABLE_DIRS"),  # ours: where (LOGOPEN) and (PROBEOPEN) may write, ':' between
         text("T_COMMAND"),
         text("M6_COMMAND"),
         text("M61_COMMAND"),
@@ -397,6 +398,7 @@ _SECTIONS = [
         integer("MDI_QUEUED_COMMANDS", 10, above=0),
         text("IO_ERROR"),
         real("HEARTBEAT_TIMEOUT", 1.0, above=0, high=10),  # ours: task's (nml/safety.py)
+        real("INTERP_TIMEOUT", 10.0, low=0),  # ours: seconds without motion (0: never)
     ]),
     Section("HAL", [
         text("HALFILE", repeat=True),

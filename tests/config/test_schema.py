@@ -19,6 +19,7 @@ from cnc.inischema import (
     load_config,
     read_config,
     real,
+    schema_section,
 )
 
 MACHINE = """\
@@ -361,3 +362,22 @@ def test_task_refuses_a_bad_parameter_file_before_reading_it(tmp_path: Path) -> 
     (tmp_path / "sim.var").write_text("5220\t1\n5161\tx\n")
     with pytest.raises(IniError, match=r"sim\.var:2: not '<parameter number> <value>': 5161 x"):
         load_setup(IniFile.load(path))
+
+
+def test_every_key_the_controller_reads_is_in_the_schema() -> None:
+    """A key read by name anywhere in the controller (``ini.find("TASK", "X")``) is declared
+    here, so it is checked at start-up and never warned about as unknown."""
+    import re
+
+    read = re.compile(r"\(\s*\"([A-Z][A-Z_0-9]*)\",\s*\"([A-Z][A-Z_0-9]*)\"")
+    root = Path(__file__).resolve().parents[2]
+    missing = set()
+    for package in ("cnc", "task", "motion", "iocontrol", "hal", "nml"):
+        for source in (root / package).rglob("*.py"):
+            if source.name == "inischema.py":
+                continue
+            for section, key in read.findall(source.read_text()):
+                found = schema_section(section)
+                if found is not None and not found.is_open and key not in found.keys:
+                    missing.add(f"[{section}]{key} ({source.relative_to(root)})")
+    assert sorted(missing) == []
