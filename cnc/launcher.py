@@ -29,6 +29,7 @@ from pathlib import Path
 
 from cnc.atomicfile import atomic_write_text
 from cnc.ini import IniError, IniFile
+from cnc.inischema import check_machine
 from cnc.runtime import (
     claim_instance,
     read_runtime_info,
@@ -79,7 +80,11 @@ class Launcher:
         self.folder = Path(self.ini_path).parent
         self.is_headless = is_headless
         self.options = options or LaunchOptions()
-        self.ini = IniFile.load(self.ini_path)
+        # the INI file against the schema, its tool table and .var file, before anything starts
+        self.config = check_machine(self.ini_path)
+        self.ini = self.config.ini
+        for warning in self.config.warnings:
+            say(f"warning: {warning}")
         self.nml: Nml | None = None
         self.host: subprocess.Popen[bytes] | None = None
         self.task: subprocess.Popen[bytes] | None = None
@@ -604,8 +609,9 @@ def main(argv: list[str]) -> int:
     protect_output()  # `cnc run ... | head` must not kill the machine when head exits
     try:
         launcher = Launcher(args.ini, is_headless=args.headless, options=options)
-    except IniError as exc:
-        say(str(exc))
+    except IniError as exc:  # nothing was started
+        for line in str(exc).splitlines():  # every problem found (cnc.inischema)
+            say(line)
         return 1
 
     def on_signal(signum: int, _frame: object) -> None:

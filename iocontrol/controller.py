@@ -491,10 +491,12 @@ class IoControl:
         self._reload_table(path)
 
     def _reload_table(self, path: Path) -> None:
-        """Replace the tool table by the file's; on any error keep the current one."""
+        """Replace the tool table by the file's; on any error keep the current one, and
+        never save it over the table file the user is editing."""
         try:
             table = load_tool_table(path, self.changer.is_random)
         except ToolTableError as exc:
+            self.is_save_blocked = self.is_save_blocked or path == self.table_path
             raise CommandError(f"{exc}; tool table not reloaded") from None
         except OSError as exc:
             raise CommandError(f"cannot read tool table {path}: {exc.strerror}") from None

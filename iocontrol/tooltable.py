@@ -18,6 +18,7 @@ atomically through ``cnc.atomicfile``. Nothing here knows about the interpreter.
 
 from __future__ import annotations
 
+import math
 import os
 
 from cnc.atomicfile import atomic_write_text
@@ -164,16 +165,32 @@ def parse_line(text: str, *, exact: bool = False) -> ToolEntry | None:
                 else:
                     entry.offset[AXES.index(letter)] = number_f
             else:
-                raise ValueError(f"unknown word '{token}'")
+                raise ValueError(f"unknown word {_shown(token)}")
         except ValueError as exc:
             if str(exc).startswith("unknown word"):
                 raise
-            raise ValueError(f"bad number in word '{token}'") from None
+            raise ValueError(f"bad number in word {_shown(token)}") from None
+    _check_finite(entry)
     if exact and not seen_t:
         raise ValueError("T word missing")
     if exact and not seen_p:
         raise ValueError("P word missing")
     return entry
+
+
+def _shown(word: str) -> str:
+    """A word quoted for a message; binary garbage as a Python literal."""
+    return f"'{word}'" if word.isprintable() else repr(word[:20])
+
+
+def _check_finite(entry: ToolEntry) -> None:
+    """ValueError naming the first value that is nan or infinite (LinuxCNC's ``sscanf``
+    reads ``Z+nan``, which then turns G43 and every move after it into no motion)."""
+    values = [*zip(AXES, entry.offset, strict=True), ("D", entry.diameter)]
+    values += [("I", entry.frontangle), ("J", entry.backangle)]
+    for letter, value in values:
+        if not math.isfinite(value):
+            raise ValueError(f"{letter} = {value} is not a finite number")
 
 
 class ToolTable:
@@ -190,8 +207,11 @@ class ToolTable:
         return entry.copy() if entry is not None else ToolEntry()
 
     def put(self, idx: int, entry: ToolEntry) -> None:
+        """Store a copy of ``entry`` at ``idx``; IndexError, or ValueError for a value that
+        is not finite (the table never holds one, so it never writes one)."""
         if not 0 <= idx < CANON_POCKETS_MAX:
             raise IndexError(f"tool index {idx} out of range")
+        _check_finite(entry)
         self.entries[idx] = entry.copy()
         if idx > self.last_index:
             self.last_index = idx

@@ -56,7 +56,6 @@ _TERM_CONDS = {
 }
 DEFAULT_JOINT_VEL = 1.0
 DEFAULT_JOINT_ACC = 1.0
-NO_HOME_SEQUENCE = 999  # what task sends for a joint without HOME_SEQUENCE (as LinuxCNC)
 AT_SPEED_SETTLE_PERIODS = 2  # see Spindle.settle_periods
 
 
@@ -759,7 +758,7 @@ class MotionController:
         self._joint(index)
         if self.homing.is_homing:
             return "cannot change homing parameters while homing"
-        sequence = None if cmd.home_sequence == NO_HOME_SEQUENCE else cmd.home_sequence
+        sequence = None if cmd.home_sequence == emc.NO_HOME_SEQUENCE else cmd.home_sequence
         self.homing_configs[index] = HomingConfig(
             home=cmd.home,
             home_offset=cmd.offset,

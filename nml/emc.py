@@ -411,6 +411,9 @@ class EMC_JOINT_SET_FERROR(EMC_JOINT_CMD_MSG, type_id=111):
     ferror: f64
 
 
+NO_HOME_SEQUENCE = 999  # home_sequence of a joint without [JOINT_n]HOME_SEQUENCE (LinuxCNC's)
+
+
 class EMC_JOINT_SET_HOMING_PARAMS(EMC_JOINT_CMD_MSG, type_id=112):
     home: f64
     offset: f64

@@ -23,10 +23,10 @@ class ini:  # LinuxCNC's name: linuxcnc.ini
             raise error(f"inifile.open({os.fspath(path)}) failed: {exc}") from None
 
     def find(self, section: str, key: str, num: int = 1) -> str | None:
-        """The ``num``-th (from 1) value of ``[section]key``, or None."""
-        values = self._file.findall(section, key)
-        return values[num - 1] if 1 <= num <= len(values) else None
+        """The ``num``-th (from 1) value of ``[section]key``, or None (also for an empty
+        value, as LinuxCNC's)."""
+        return self._file.find_nth(section, key, num)
 
     def findall(self, section: str, key: str) -> list[str]:
-        """Every value of ``[section]key`` in file order (empty list if none)."""
+        """Every value of ``[section]key`` in file order, up to the first empty one."""
         return self._file.findall(section, key)

@@ -1,17 +1,20 @@
-"""What halui reads from the INI file: the machine's size, its limits and the MDI buttons."""
+"""What halui reads from the INI file: the machine's size, its limits and the MDI buttons.
+
+Types, bounds and the INI-wide checks are ``cnc.inischema``'s: a bad value anywhere stops
+halui before it touches HAL, with ``file:line``. Keys a file may leave out have halui's own
+defaults here, as LinuxCNC's halui has them (the file need not describe a whole machine).
+"""
 
 from __future__ import annotations
 
 import os
 from dataclasses import dataclass
 
-from cnc.api.commands import TEXT_LIMIT
-from cnc.ini import IniError, IniFile
-from nml.emc import EMCMOT_MAX_JOINTS, EMCMOT_MAX_SPINDLES
+from cnc.ini import IniFile
+from cnc.inischema import SCHEMA, MachineConfig, read_config
 
 AXIS_LETTERS = "xyzabcuvw"  # axis index -> letter, as halui.axis.selected counts them
-MAX_MDI_COMMANDS = 64  # LinuxCNC's limit on [HALUI]MDI_COMMAND lines
-CYCLE_TIME_S = 0.02  # LinuxCNC's halui polls every 20 ms
+_KEYS = SCHEMA["HALUI"].keys
 
 
 @dataclass(frozen=True)
@@ -26,73 +29,42 @@ class HaluiConfig:
     min_spindle_override: float = 0.0  # [DISPLAY]MIN_SPINDLE_OVERRIDE
     max_spindle_override: float = 1.0  # [DISPLAY]MAX_SPINDLE_OVERRIDE
     max_velocity: float = 1.0  # [TRAJ]MAX_LINEAR_VELOCITY, else [AXIS_X]MAX_VELOCITY
-    cycle_time: float = CYCLE_TIME_S  # [HALUI]CYCLE_TIME (ours; LinuxCNC's is fixed)
-    heartbeat_timeout: float = 1.0  # [HALUI]HEARTBEAT_TIMEOUT (nml/safety.py)
+    cycle_time: float = _KEYS["CYCLE_TIME"].default  # [HALUI]CYCLE_TIME
+    heartbeat_timeout: float = _KEYS["HEARTBEAT_TIMEOUT"].default  # (nml/safety.py)
 
 
 def load_config(ini_path: str | os.PathLike[str]) -> HaluiConfig:
-    """Read the INI file; IniError (``file:line: cause``) for a value halui cannot use.
-
-    Like LinuxCNC's halui, non-positive limits and counts keep their defaults; unlike it,
-    a value that is not a number is an error rather than silently ignored.
-    """
-    ini = IniFile.load(ini_path)
+    """Read the INI file; IniError (``file:line: cause``, every problem) for a value halui
+    or any other part of the controller cannot use."""
+    config = read_config(IniFile.load(ini_path), is_machine=False)
+    value = config.value
+    defaults = HaluiConfig(str(ini_path))
     return HaluiConfig(
         ini_path=str(ini_path),
-        num_joints=_count(ini, "KINS", "JOINTS", 3, EMCMOT_MAX_JOINTS),
-        axes=_axes(ini.find("TRAJ", "COORDINATES") or ""),
-        num_spindles=_count(ini, "TRAJ", "SPINDLES", 1, EMCMOT_MAX_SPINDLES),
-        has_home_all=ini.find("JOINT_0", "HOME_SEQUENCE") is not None,
-        mdi_commands=_mdi_commands(ini),
-        max_feed_override=_positive(ini, "DISPLAY", "MAX_FEED_OVERRIDE", 1.0),
-        min_spindle_override=_positive(ini, "DISPLAY", "MIN_SPINDLE_OVERRIDE", 0.0),
-        max_spindle_override=_positive(ini, "DISPLAY", "MAX_SPINDLE_OVERRIDE", 1.0),
-        max_velocity=_max_velocity(ini),
-        cycle_time=_positive(ini, "HALUI", "CYCLE_TIME", CYCLE_TIME_S),
-        heartbeat_timeout=_positive(ini, "HALUI", "HEARTBEAT_TIMEOUT", 1.0),
+        num_joints=value("KINS", "JOINTS") or defaults.num_joints,
+        axes=config.axes.lower() if config.entry("TRAJ", "COORDINATES") else AXIS_LETTERS,
+        num_spindles=value("TRAJ", "SPINDLES"),
+        has_home_all=value("JOINT_0", "HOME_SEQUENCE") is not None,
+        mdi_commands=tuple(config.values("HALUI", "MDI_COMMAND")),
+        max_feed_override=value("DISPLAY", "MAX_FEED_OVERRIDE"),
+        min_spindle_override=_given(
+            value("DISPLAY", "MIN_SPINDLE_OVERRIDE"), defaults.min_spindle_override
+        ),
+        max_spindle_override=_given(
+            value("DISPLAY", "MAX_SPINDLE_OVERRIDE"), defaults.max_spindle_override
+        ),
+        max_velocity=_max_velocity(config),
+        cycle_time=value("HALUI", "CYCLE_TIME"),
+        heartbeat_timeout=value("HALUI", "HEARTBEAT_TIMEOUT"),
     )
 
 
-def _count(ini: IniFile, section: str, key: str, default: int, limit: int) -> int:
-    value = ini.get_int(section, key)
-    if value is None or value <= 0:
-        return default
-    if value > limit:
-        entry = ini.entry(section, key)
-        assert entry is not None
-        raise IniError(entry.file, entry.line, f"[{section}]{key} = {value}: at most {limit}")
-    return value
+def _given(value: float | None, default: float) -> float:
+    return default if value is None else value
 
 
-def _positive(ini: IniFile, section: str, key: str, default: float) -> float:
-    value = ini.get_float(section, key)
-    return value if value is not None and value > 0 else default
-
-
-def _axes(coordinates: str) -> str:
-    """The axes named in [TRAJ]COORDINATES (every axis when it names none, as LinuxCNC)."""
-    named = {letter for letter in coordinates.lower() if letter in AXIS_LETTERS}
-    return "".join(letter for letter in AXIS_LETTERS if letter in named) or AXIS_LETTERS
-
-
-def _max_velocity(ini: IniFile) -> float:
+def _max_velocity(config: MachineConfig) -> float:
     for section, key in (("TRAJ", "MAX_LINEAR_VELOCITY"), ("AXIS_X", "MAX_VELOCITY")):
-        value = ini.get_float(section, key)
-        if value is not None:
-            return value
+        if config.is_set(section, key):
+            return config.value(section, key)
     return 1.0
-
-
-def _mdi_commands(ini: IniFile) -> tuple[str, ...]:
-    entries = ini.entries("HALUI", "MDI_COMMAND")
-    if len(entries) > MAX_MDI_COMMANDS:
-        extra = entries[MAX_MDI_COMMANDS]
-        raise IniError(extra.file, extra.line, f"more than {MAX_MDI_COMMANDS} MDI_COMMAND lines")
-    for entry in entries:
-        if not entry.value:
-            raise IniError(entry.file, entry.line, "[HALUI]MDI_COMMAND is empty")
-        if len(entry.value.encode()) > TEXT_LIMIT:  # what an MDI command message holds
-            raise IniError(
-                entry.file, entry.line, f"[HALUI]MDI_COMMAND longer than {TEXT_LIMIT} bytes"
-            )
-    return tuple(entry.value for entry in entries)

@@ -2,8 +2,8 @@
 
 Numbered parameters #1..#5601 live in one list. The persistent ones (``REQUIRED``: G28/G30
 homes, G92, the nine coordinate systems) are read from and written back to the parameter file
-in LinuxCNC's format (``<number>\\t<value>`` lines, ascending); the file is replaced
-atomically and the previous version kept as ``.bak``.
+in LinuxCNC's format by ``task.varfile`` (``<number>\\t<value>`` lines, ascending); the file
+is replaced atomically and the previous version kept as ``.bak``.
 
 Named parameters are local to a call level unless their name starts with ``_``; the
 predefined ``#<_...>`` ones are read-only and computed from the interpreter state.
@@ -14,11 +14,9 @@ from __future__ import annotations
 import math
 import os
 
-from cnc.atomicfile import atomic_write_text
+from task.varfile import MAX_PARAMETERS, VarFileError, read_var_file, write_var_file
 
 from .errors import InterpError
-
-MAX_PARAMETERS = 5602
 
 REQUIRED = (
     list(range(5161, 5170))
@@ -92,107 +90,45 @@ _PREDEFINED = [
 ]
 
 
-def _scan_line(line: str) -> tuple[int, float] | None:
-    """``sscanf(line, "%d %lf")``: a leading integer, blanks, then a number."""
-    parts = line.split()
-    if len(parts) < 2:
-        return None
-    head, value = parts[0], parts[1]
-    if head.isascii() and head.isdigit():  # the common case: "5220\t1.000000"
-        try:
-            return int(head), float(value)
-        except ValueError:
-            pass
-    digits = ""
-    for k, ch in enumerate(head):
-        if ch.isdigit() or (k == 0 and ch in "+-"):
-            digits += ch
-        else:
-            break
-    if digits in ("", "+", "-") or len(digits) != len(head):
-        if digits in ("", "+", "-"):
-            return None
-        return None  # "%d %lf" needs blank after the integer
-    number = None
-    for end in range(len(value), 0, -1):
-        try:
-            number = float(value[:end])
-            break
-        except ValueError:
-            continue
-    if number is None:
-        return None
-    return int(digits), number
-
-
 class ParamsMixin:
     """Parameter storage; mixed into the Interpreter."""
 
     # ------------------------------------------------------------- var files
     def restore_parameters(self, filename: str) -> None:
-        pars = self.parameters
+        """Read the ``.var`` file as LinuxCNC does (``task.varfile``, lenient: the
+        controller checks the file strictly before task starts); a missing file is none."""
         if not os.path.exists(filename):
             return
         try:
-            with open(filename, encoding="latin-1") as handle:
-                lines = handle.readlines()
-        except OSError:
-            raise InterpError(f"Unable to open parameter file: '{filename}'") from None
-        k = 0
-        for line in lines:
-            scanned = _scan_line(line)
-            if scanned is None:
-                continue
-            variable, value = scanned
-            if variable <= 0 or variable >= MAX_PARAMETERS:
-                raise InterpError("Parameter number out of range")
-            while k < MAX_PARAMETERS:
-                if k > variable:
-                    raise InterpError("Parameter file out of order")
-                if k == variable:
-                    pars[k] = value
-                    k += 1
-                    break
-                pars[k] = 0.0
-                k += 1
-        for i in range(k, MAX_PARAMETERS):
-            pars[i] = 0.0
+            found = read_var_file(filename, strict=False)
+        except VarFileError as error:
+            if error.line == 0:
+                raise InterpError(f"Unable to open parameter file: '{filename}'") from None
+            raise InterpError(error.cause) from None
+        pars = self.parameters
+        pars[:] = [0.0] * MAX_PARAMETERS
+        for number, value in found.items():
+            pars[number] = value
 
     def save_parameters(self, filename: str) -> None:
-        self.save_error: OSError | None = None
-        pars = self.parameters
+        """Write the parameters the file lists, and the persistent ones (``REQUIRED``), in
+        LinuxCNC's format, atomically, keeping the previous file as ``.bak``. Never raises,
+        as LinuxCNC's: ``save_error`` says why nothing was saved (rs274 says nothing, task
+        tells the operator) when the file on disk cannot be read (it is then left as it
+        is), a value is not finite (nan is never written), or the file cannot be written."""
+        self.save_error: Exception | None = None
         try:
-            with open(filename, encoding="latin-1") as handle:
-                lines = handle.readlines()
-        except OSError:
-            lines = []
-        out = []
-        k = 0
-        for line in lines:
-            scanned = _scan_line(line)
-            if scanned is None:
-                continue
-            variable, _ = scanned
-            if variable <= 0 or variable >= MAX_PARAMETERS:
-                return  # LinuxCNC gives up (its caller ignores the error)
-            while k < MAX_PARAMETERS:
-                if k > variable:
-                    return
-                if k == variable:
-                    out.append(f"{k}\t{pars[k]:f}\n")
-                    k += 1
-                    break
-                if k in _REQUIRED_SET:
-                    out.append(f"{k}\t{pars[k]:f}\n")
-                k += 1
-        for i in range(k, MAX_PARAMETERS):
-            if i in _REQUIRED_SET:
-                out.append(f"{i}\t{pars[i]:f}\n")
+            listed = read_var_file(filename, strict=False) if os.path.exists(filename) else {}
+        except VarFileError as error:
+            self.save_error = error
+            return
+        pars = self.parameters
+        numbers = sorted(_REQUIRED_SET.union(listed))
         existed = os.path.exists(filename)
         try:
-            atomic_write_text(filename, "".join(out), keep_backup=True)
-        except OSError as exc:
-            self.save_error = exc  # rs274 says nothing; task tells the operator
+            write_var_file(filename, {number: pars[number] for number in numbers})
+        except (VarFileError, OSError) as error:
+            self.save_error = error
             return
         if not existed:
             # LinuxCNC links the old file to .bak before the rename and reports the failure

@@ -44,6 +44,11 @@ def test_machine_limits_and_mdi_commands(tmp_path: Path) -> None:
     assert (config.min_spindle_override, config.max_spindle_override) == (0.5, 2.0)
 
 
+def test_an_empty_last_mdi_command_is_not_set_as_in_linuxcnc(tmp_path: Path) -> None:
+    config = load_config(write_ini(tmp_path, "[HALUI]\nMDI_COMMAND = G0 X1\nMDI_COMMAND =\n"))
+    assert config.mdi_commands == ("G0 X1",)
+
+
 def test_max_velocity_falls_back_to_the_x_axis(tmp_path: Path) -> None:
     config = load_config(write_ini(tmp_path, "[AXIS_X]\nMAX_VELOCITY = 12\n"))
     assert config.max_velocity == 12
@@ -53,10 +58,16 @@ def test_max_velocity_falls_back_to_the_x_axis(tmp_path: Path) -> None:
     ("text", "line", "cause"),
     [
         ("[KINS]\nJOINTS = three\n", 2, "[KINS]JOINTS = 'three' is not an integer"),
-        ("[KINS]\nJOINTS = 17\n", 2, "at most 16"),
-        ("[HALUI]\nMDI_COMMAND = G0 X1\nMDI_COMMAND =\n", 3, "MDI_COMMAND is empty"),
+        ("[KINS]\nJOINTS = 17\n", 2, "out of range; allowed: an integer from 1 to 16"),
+        (
+            "[HALUI]\nMDI_COMMAND = G0 X1\nMDI_COMMAND =\nMDI_COMMAND = G0 X2\n",
+            4,
+            "[HALUI]MDI_COMMAND after an empty one",
+        ),
         ("[HALUI]\nMDI_COMMAND = G1 " + "X1 " * 100 + "\n", 2, "longer than 254 bytes"),
-        ("[DISPLAY]\nMAX_FEED_OVERRIDE = lots\n", 2, "is not a number"),
+        ("[HALUI]\n" + "MDI_COMMAND = G0\n" * 65, 66, "more than 64 lines"),
+        ("[DISPLAY]\nMAX_FEED_OVERRIDE = lots\n", 2, "is not a finite number"),
+        ("[DISPLAY]\nMAX_FEED_OVERRIDE = 0\n", 2, "allowed: a number > 0"),
     ],
 )
 def test_bad_values_name_file_and_line(tmp_path: Path, text: str, line: int, cause: str) -> None:
@@ -72,7 +83,8 @@ def test_the_program_refuses_a_bad_ini_before_touching_hal(
 ) -> None:
     path = write_ini(tmp_path, "[KINS]\nJOINTS = many\n")
     assert main(["-ini", str(path)]) == 1
-    assert f"halui: {path}:2: [KINS]JOINTS = 'many' is not an integer" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert f"halui: {path}:2: [KINS]JOINTS = 'many' is not an integer" in err
 
 
 def test_the_program_needs_an_ini_file(

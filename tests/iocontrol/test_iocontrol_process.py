@@ -315,11 +315,19 @@ def test_set_offset_and_set_number_update_status_and_file(machine: Machine) -> N
     assert machine.pin("tool-number") == 1 and machine.pin("tool-change") == 0
 
 
-def test_reload_of_a_bad_tool_table_reports_file_and_line(machine: Machine) -> None:
-    machine.table.write_text("T1 P1 Z0.5\nT2 P2 Zoops\n")
+@pytest.mark.parametrize("word", ["Zoops", "Z+nan", "Z-inf"])
+def test_reload_of_a_bad_tool_table_reports_file_and_line(machine: Machine, word: str) -> None:
+    bad = f"T1 P1 Z0.5\nT2 P2 {word}\n"
+    machine.table.write_text(bad)
     st = machine.run(emc.EMC_TOOL_LOAD_TOOL_TABLE(file=""))
     assert st.status == RCS_STATUS.ERROR
     assert any(f"{machine.table}:2:" in text for text in machine.errors())
+    # a change to the table in use is not saved over the file the user is editing
+    offset = emc.EmcPose()
+    st = machine.run(emc.EMC_TOOL_SET_OFFSET(pocket=1, toolno=1, offset=offset, diameter=3))
+    assert st.status == RCS_STATUS.ERROR
+    assert any("tool table not saved" in text for text in machine.errors())
+    assert machine.table.read_text() == bad
     # the previous table stays in use
     serial = machine.send(emc.EMC_TOOL_PREPARE(tool=2))
     assert machine.wait_ack(serial).status == RCS_STATUS.EXEC
@@ -379,19 +387,25 @@ def test_restart_after_kill_takes_over(machine_factory: Callable[..., Machine]) 
     assert read_tool_data().find_index_for_tool(2) == 2
 
 
-def test_malformed_tool_table_at_start_is_reported_and_kept(
-    machine_factory: Callable[..., Machine],
+@pytest.mark.parametrize(
+    ("table", "cause"),
+    [
+        ("T1 P1\nT2 P2 Q\n", "bad number in word 'Q'"),
+        ("T1 P1 Z2\nT2 P2 Z+nan\n", "Z = nan is not a finite number"),
+        ("T1 P1\n\x00\x01\x02 garbage\n", "unknown word '\\x00\\x01\\x02'"),
+    ],
+)
+def test_a_malformed_tool_table_stops_iocontrol_before_it_starts(
+    procs: Processes, tmp_path: Path, table: str, cause: str
 ) -> None:
-    machine = machine_factory("T1 P1\nT2 P2 Q\n")
-    assert any(f"{machine.table}:2:" in text for text in machine.errors())
-    offset = emc.EmcPose()
-    st = machine.run(emc.EMC_TOOL_SET_OFFSET(pocket=1, toolno=7, offset=offset))
-    assert st.status == RCS_STATUS.ERROR  # not saved over the user's file
-    assert machine.table.read_text() == "T1 P1\nT2 P2 Q\n"
-    code, err = stop(machine.proc)
-    assert code == 0
-    assert f"{machine.table}:2:" in err
-    assert machine.table.read_text() == "T1 P1\nT2 P2 Q\n"
+    """Never a machine with an empty tool table, and the user's file left as it is."""
+    ini = write_config(tmp_path, table)
+    proc = procs.python("-m", "iocontrol", "-ini", str(ini))
+    _, err = proc.communicate(timeout=WAIT_S)
+    assert proc.returncode == 1
+    assert f"iocontrol: {tmp_path / 'tools.tbl'}:2: {cause}" in err
+    assert (tmp_path / "tools.tbl").read_text() == table
+    assert sorted(path.name for path in tmp_path.iterdir()) == ["machine.ini", "tools.tbl"]
 
 
 def test_bad_ini_value_is_a_clear_error(procs: Processes, tmp_path: Path) -> None:

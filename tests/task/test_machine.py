@@ -386,7 +386,7 @@ def test_after_homing_a_ui_jogs_axes_in_teleop_mode(machine: Machine) -> None:
             lambda f: (f / "mill.ini").write_text(
                 (f / "mill.ini").read_text().replace("CYCLE_TIME = 0.005", "CYCLE_TIME = fast")
             ),
-            "mill.ini:11: [TASK]CYCLE_TIME = 'fast' is not a number",
+            "mill.ini:11: [TASK]CYCLE_TIME = 'fast' is not a finite number",
         ),
     ],
 )

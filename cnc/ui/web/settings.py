@@ -15,6 +15,7 @@ from typing import Any
 
 import cnc
 from cnc.ini import IniFile
+from cnc.inischema import MachineConfig, read_config
 from cnc.ui.formatting import AXIS_LETTERS
 from cnc.ui.web.messages import MessagePin, read_message_pins
 
@@ -144,7 +145,9 @@ class Settings:
         """The settings of the INI file at ``path``; ``cnc.error`` if it cannot be read,
         ``IniError`` for a bad value that cannot be ignored."""
         ini = cnc.ini(path)
-        folder = Path(path).resolve().parent
+        folder = Path(os.path.abspath(path)).parent  # not through symlinks, as LinuxCNC
+        parsed = IniFile.load(path)
+        config = read_config(parsed, is_machine=False)  # the machine's keys, typed and checked
 
         def display(key: str) -> str | None:
             return ini.find("DISPLAY", key)
@@ -155,9 +158,8 @@ class Settings:
             except ValueError:
                 return default
 
-        units = (ini.find("TRAJ", "LINEAR_UNITS") or "mm").strip().lower()
-        units_per_mm = 1.0 if units in ("mm", "metric") else 1.0 / MM_PER_INCH
-        coordinates = "".join((ini.find("TRAJ", "COORDINATES") or "XYZ").split()).upper()
+        units_per_mm = 1.0 if config.value("TRAJ", "LINEAR_UNITS") != "inch" else 1 / MM_PER_INCH
+        coordinates = config.coordinates
         # [DISPLAY] jog velocities are in units per second; the page shows units per minute.
         default_speed = number("DEFAULT_LINEAR_VELOCITY", 10.0) * 60
         extensions = []
@@ -165,10 +167,9 @@ class Settings:
             patterns = entry.split()[0] if entry.split() else ""
             extensions += [ext.strip().lower() for ext in patterns.split(",") if ext.strip()]
         prefix = ini_path(display("PROGRAM_PREFIX"), folder)
-        parsed = IniFile.load(path)
         message_pins, problems = read_message_pins(parsed)
         return cls(
-            ini_file=str(Path(path).resolve()),
+            ini_file=str(folder / Path(path).name),
             machine=ini.find("EMC", "MACHINE") or "",
             title=display("TITLE") or "",
             cycle_time_s=cycle_time(display("CYCLE_TIME")),
@@ -209,8 +210,8 @@ class Settings:
             mdi_history_file=ini_path(display("MDI_HISTORY_FILE"), folder),
             parameter_file=ini_path(ini.find("RS274NGC", "PARAMETER_FILE"), folder),
             tool_table=ini_path(ini.find("EMCIO", "TOOL_TABLE"), folder),
-            is_random_toolchanger=bool(parsed.get_bool("EMCIO", "RANDOM_TOOLCHANGER", False)),
-            limits=_limits(ini, coordinates),
+            is_random_toolchanger=config.value("EMCIO", "RANDOM_TOOLCHANGER"),
+            limits=_limits(config),
             filters=_filters(parsed),
             message_pins=message_pins,
             problems=problems,
@@ -253,16 +254,13 @@ def _numbered(ini: Any, section: str, prefix: str) -> list[str]:
     return found
 
 
-def _limits(ini: Any, letters: str) -> dict[str, list[float]]:
+def _limits(config: MachineConfig) -> dict[str, list[float]]:
     """[AXIS_L]MIN_LIMIT and MAX_LIMIT of each axis that has both, in machine units."""
     found = {}
-    for letter in dict.fromkeys(letters):
-        try:
-            low = float(ini.find(f"AXIS_{letter}", "MIN_LIMIT"))
-            high = float(ini.find(f"AXIS_{letter}", "MAX_LIMIT"))
-        except (TypeError, ValueError):
-            continue
-        found[letter] = [low, high]
+    for letter in config.axes:
+        section = f"AXIS_{letter}"
+        if config.is_set(section, "MIN_LIMIT") and config.is_set(section, "MAX_LIMIT"):
+            found[letter] = [config.value(section, "MIN_LIMIT"), config.value(section, "MAX_LIMIT")]
     return found
 
 
