@@ -13,12 +13,15 @@ Realtime component (loaded into the host with ``loadrt NAME``; see hal/README.md
         def update(self, period: int) -> None:
             self.out = self.in0 and self.in1
 
-Userspace component (its own process), as with LinuxCNC's Python ``hal`` module::
+Userspace component (its own process)::
 
     c = component("mycomp")
     c.newpin("out", HAL_FLOAT, HAL_OUT)
     c.ready()
     c["out"] = 1.5
+
+(LinuxCNC's whole Python ``hal`` module, for scripts written for LinuxCNC, is
+``hal.pymodule``: ``import hal`` gives it.)
 """
 
 from __future__ import annotations
@@ -49,6 +52,7 @@ from hal.core import (
     TYPES_BY_NAME,
     Hal,
     HalError,
+    check_name,
 )
 
 __all__ = [
@@ -347,6 +351,13 @@ class RtComponent:
     prefix: str = ""
     #: loadrt options besides count/names, with their converters, e.g. {"depth": int}
     options: ClassVar[dict[str, Callable[[str], Any]]] = {}
+    #: instances made without count=/names= (LinuxCNC's default_count / default_num_chan)
+    default_count: ClassVar[int] = 1
+    #: the most instances allowed (LinuxCNC's MAX_CHAN of modules written in C), or None
+    max_count: ClassVar[int | None] = None
+    #: the loadrt argument giving the count: ``num_chan`` for LinuxCNC's C modules
+    #: (``count`` is accepted as well)
+    count_option: ClassVar[str] = "count"
 
     def setup(self, **options: Any) -> None:
         """Called once after the instance's pins exist (``self.hal``, ``self.comp`` are set)."""
@@ -356,26 +367,40 @@ class RtComponent:
 
     @classmethod
     def instances(cls, module: str, args: dict[str, str]) -> list[tuple[str, dict[str, Any]]]:
-        """(instance name, setup options) for each instance ``loadrt`` asks for."""
-        unknown = set(args) - {"count", "names"} - set(cls.options)
+        """(instance name, setup options) for each instance ``loadrt`` asks for.
+
+        As LinuxCNC: ``count=N`` (``num_chan=N`` for the modules written in C, see
+        ``count_option``) or ``names=a,b``, not both; neither, ``count=0`` or an empty
+        ``names=`` give ``default_count`` instances; ``max_count`` bounds both.
+        """
+        count_keys = {"count", cls.count_option}
+        unknown = set(args) - count_keys - {"names"} - set(cls.options)
         if unknown:
             raise HalError(f"{module}: unknown argument '{sorted(unknown)[0]}'")
-        if "count" in args and "names" in args:
-            raise HalError(f"{module}: count= and names= are mutually exclusive")
         options = {
             key: cls.options[key](value) for key, value in args.items() if key in cls.options
         }
-        if "names" in args:
-            names = [n for n in args["names"].split(",") if n]
-        else:
-            try:
-                count = int(args.get("count", "1"))
-            except ValueError:
-                raise HalError(f"{module}: count must be a number") from None
-            if count < 1:
-                raise HalError(f"{module}: count must be at least 1")
+        names = [n for n in args.get("names", "").split(",") if n]
+        count_text = args.get(cls.count_option) or args.get("count") or "0"
+        try:
+            count = int(count_text, 0)
+        except ValueError:
+            raise HalError(f"{module}: {cls.count_option}={count_text} is not a number") from None
+        if count and names:
+            raise HalError(f"{module}: {cls.count_option}= and names= are mutually exclusive")
+        if not count and not names:
+            count = cls.default_count
+        limit = cls.max_count
+        if limit is not None and not 0 < (len(names) or count) <= limit:
+            raise HalError(
+                f"{module}: ERROR: invalid {cls.count_option if count else 'number of names'}:"
+                f" {len(names) or count} (1 to {limit})"
+            )
+        if not names:
             prefix = cls.prefix or module.replace("_", "-")
             names = [f"{prefix}.{i}" for i in range(count)]
+        for name in names:
+            check_name("instance", name)
         return [(name, dict(options)) for name in names]
 
     def is_connected(self, attr: str) -> bool:
@@ -540,40 +565,3 @@ def _exit_on_sigterm() -> None:
     is_main = threading.current_thread() is threading.main_thread()
     if is_main and signal.getsignal(signal.SIGTERM) is signal.SIG_DFL:
         signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))
-
-
-# ---------------------------------------------------------------- module-level helpers
-def component_exists(name: str) -> bool:
-    return name in shared_hal().meta["comps"]
-
-
-def component_is_ready(name: str) -> bool:
-    comp = shared_hal().meta["comps"].get(name)
-    return bool(comp and comp["is_ready"])
-
-
-def get_value(name: str) -> Any:
-    """The value of a pin, parameter or signal by name, like ``hal.get_value``."""
-    hal = shared_hal()
-    found = hal.find_pin(name)
-    if found:
-        value = hal.pin_value(found[1])
-        return bool(value) if found[1]["type"] == HAL_BIT else value
-    found = hal.find_param(name)
-    if found:
-        value = hal.read_slot(found[1]["type"], found[1]["slot"])
-        return bool(value) if found[1]["type"] == HAL_BIT else value
-    sig = hal.meta["sigs"].get(name)
-    if sig:
-        value = hal.read_slot(sig["type"], sig["slot"])
-        return bool(value) if sig["type"] == HAL_BIT else value
-    raise HalError(f"pin, parameter or signal '{name}' not found")
-
-
-def pin_has_writer(name: str) -> bool:
-    hal = shared_hal()
-    found = hal.find_pin(name)
-    if not found:
-        raise HalError(f"pin '{name}' not found")
-    sig = found[1]["sig"]
-    return bool(sig and hal.meta["sigs"][sig]["writers"] + hal.meta["sigs"][sig]["bidirs"])

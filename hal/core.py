@@ -50,7 +50,7 @@ TYPES_BY_NAME = {name: code for code, name in TYPE_NAMES.items()}
 DIR_NAMES = {HAL_IN: "IN", HAL_OUT: "OUT", HAL_IO: "I/O", HAL_RO: "RO", HAL_RW: "RW"}
 DIRS_BY_NAME = {"in": HAL_IN, "out": HAL_OUT, "io": HAL_IO, "ro": HAL_RO, "rw": HAL_RW}
 
-HAL_NAME_LEN = 41
+HAL_NAME_LEN = 47  # as LinuxCNC 2.9
 NSLOTS = 1 << 17
 HEADER_BYTES = 64
 DATA_BYTES = HEADER_BYTES + NSLOTS * 4 + NSLOTS * 8
@@ -377,7 +377,7 @@ class Hal:
             for name in [n for n, t in meta["threads"].items() if t["owner"] == comp]:
                 for funct in meta["threads"][name]["functs"]:
                     meta["functs"][funct]["users"] -= 1
-                del meta["threads"][name]
+                meta["free"].append(meta["threads"].pop(name)["overruns_slot"])
             for table in ("pin_alias", "param_alias"):
                 owned = meta["pins"] if table == "pin_alias" else meta["params"]
                 meta[table] = {k: v for k, v in meta[table].items() if v in owned}
@@ -546,17 +546,29 @@ class Hal:
                 raise HalError(f"duplicate function '{name}'")
             meta["functs"][name] = {"owner": comp, "fp": has_fp, "users": 0}
 
-    def new_thread(self, comp: str, name: str, period_ns: int, *, has_fp: bool = True) -> None:
+    def new_thread(self, comp: str, name: str, period_ns: int, *, has_fp: bool = True) -> int:
+        """Declare a thread; returns the slot of its overrun counter (``thread_overruns``)."""
         check_name("thread", name)
         with self.edit() as meta:
             if name in meta["threads"]:
                 raise HalError(f"duplicate thread name '{name}'")
+            slot = self._alloc_slot(meta)
             meta["threads"][name] = {
                 "owner": comp,
                 "period": int(period_ns),
                 "fp": has_fp,
                 "functs": [],
+                "overruns_slot": slot,
             }
+        return slot
+
+    def thread_overruns(self, name: str) -> int:
+        """Periods of a thread whose functions ran past the next deadline (our addition to
+        LinuxCNC's HAL, kept out of its pin and parameter lists)."""
+        thread = self.meta["threads"].get(name)
+        if thread is None:
+            raise HalError(f"thread '{name}' not found")
+        return int(self.q[thread["overruns_slot"]])
 
     def add_funct(self, funct: str, thread: str, position: int = -1) -> None:
         with self.edit() as meta:

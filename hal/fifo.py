@@ -1,8 +1,11 @@
-"""A shared-memory FIFO of HAL samples between a realtime component and a user program.
+"""A shared-memory FIFO of HAL samples between a realtime component and a user program
+(LinuxCNC's ``hal_stream``): one writer and one reader.
 
-One writer and one reader. The segment holds a header of four int64 (rows written, rows
-read, depth, columns) and ``depth`` rows of ``1 + columns`` int64: the sample number, then
-each value as the raw 8 bytes of its HAL slot (floats are reinterpreted by the reader).
+The segment holds int64 words: a header (rows written, rows read, depth, columns, underruns,
+overruns, the last sample number, a magic number), one word per column with its HAL type,
+then ``depth`` rows of ``1 + columns`` words: the sample number, then each value as the raw
+8 bytes of its HAL slot (floats are reinterpreted by the reader). As in LinuxCNC a FIFO of
+depth D holds at most D - 1 rows.
 """
 
 from __future__ import annotations
@@ -16,8 +19,11 @@ import posix_ipc
 from hal.core import HAL_BIT, HAL_FLOAT, HAL_S32, HAL_S64, HAL_U32, HAL_U64, HalError
 from nml.ipcnames import ipc_name
 
-HEADER = 4
-#: sampler/streamer config letters (LinuxCNC's) -> HAL types
+WRITTEN, READ, DEPTH, WIDTH, UNDERRUNS, OVERRUNS, LAST_SAMPLE, MAGIC = range(8)
+HEADER = 8
+MAGIC_NUMBER = 0x48535452  # "HSTR"
+MAX_COLUMNS = 20  # LinuxCNC's HAL_STREAM_MAX_PINS
+#: sampler/streamer config letters (LinuxCNC's, either case) -> HAL types
 CFG_TYPES = {
     "f": HAL_FLOAT,
     "b": HAL_BIT,
@@ -26,14 +32,26 @@ CFG_TYPES = {
     "l": HAL_S64,
     "k": HAL_U64,
 }
+CFG_LETTERS = {hal_type: letter for letter, hal_type in CFG_TYPES.items()}
+# LinuxCNC's keys of sampler and streamer channels (hal.sampler_base / hal.streamer_base)
+SAMPLER_BASE = 0x48534130
+STREAMER_BASE = 0x48535430
 
 
 def fifo_name(channel: str) -> str:
     return ipc_name("hal", f"fifo.{channel}")
 
 
+def channel_of_key(key: int) -> str:
+    """The channel a LinuxCNC stream key names: sampler_base + N is ``sampler.N``."""
+    for base, module in ((SAMPLER_BASE, "sampler"), (STREAMER_BASE, "streamer")):
+        if 0 <= key - base < 256:
+            return f"{module}.{key - base}"
+    return f"stream.{key:x}"
+
+
 class Fifo:
-    """A FIFO segment: ``Fifo.create`` in the component, ``Fifo.open`` in the program."""
+    """A FIFO segment: ``Fifo.create`` by the side that owns it, ``Fifo.open`` by the other."""
 
     def __init__(self, shm: posix_ipc.SharedMemory, name: str) -> None:
         self.name = name
@@ -41,18 +59,30 @@ class Fifo:
         shm.close_fd()
         whole = np.frombuffer(self._map, dtype=np.int64)
         self.header = whole[:HEADER]
-        depth, width = int(self.header[2]), int(self.header[3])
+        if int(self.header[MAGIC]) != MAGIC_NUMBER:
+            self.close()
+            raise HalError(f"'{name}' is not a HAL stream")
+        depth, width = int(self.header[DEPTH]), int(self.header[WIDTH])
         self.depth, self.width = depth, width
-        self.rows = whole[HEADER : HEADER + depth * (width + 1)].reshape(depth, width + 1)
+        self.types = [int(t) for t in whole[HEADER : HEADER + width]]
+        start = HEADER + width
+        self.rows = whole[start : start + depth * (width + 1)].reshape(depth, width + 1)
 
     @classmethod
-    def create(cls, channel: str, depth: int, width: int) -> Fifo:
+    def create(cls, channel: str, depth: int, types: list[int]) -> Fifo:
+        if depth < 2:
+            raise HalError(f"{channel}: depth must be at least 2")
+        if not 0 < len(types) <= MAX_COLUMNS:
+            raise HalError(f"{channel}: 1 to {MAX_COLUMNS} values per row")
         name = fifo_name(channel)
-        size = 8 * (HEADER + depth * (width + 1))
+        width = len(types)
+        size = 8 * (HEADER + width + depth * (width + 1))
         shm = posix_ipc.SharedMemory(name, posix_ipc.O_CREAT, size=size)
-        header = mmap.mmap(shm.fd, 8 * HEADER)
-        header[:] = np.array([0, 0, depth, width], dtype=np.int64).tobytes()
-        header.close()
+        head = mmap.mmap(shm.fd, 8 * (HEADER + width))
+        header = [0] * HEADER
+        header[DEPTH], header[WIDTH], header[MAGIC] = depth, width, MAGIC_NUMBER
+        head[:] = np.array(header + list(types), dtype=np.int64).tobytes()
+        head.close()
         return cls(shm, name)
 
     @classmethod
@@ -74,29 +104,53 @@ class Fifo:
 
     # ------------------------------------------------------------ both ends
     def count(self) -> int:
-        return int(self.header[0] - self.header[1])
+        """Rows waiting to be read."""
+        return int(self.header[WRITTEN] - self.header[READ])
 
-    def put(self, row: list[int]) -> bool:
-        """Append one row (sample number first); False when the FIFO is full."""
-        written = int(self.header[0])
-        if written - int(self.header[1]) >= self.depth:
+    @property
+    def capacity(self) -> int:
+        return self.depth - 1
+
+    def is_writable(self) -> bool:
+        return self.count() < self.capacity
+
+    def put(self, values: list[int]) -> bool:
+        """Append one row of raw value words, numbering it; False (and an overrun counted)
+        when the FIFO is full."""
+        header = self.header
+        written = int(header[WRITTEN])
+        if written - int(header[READ]) >= self.depth - 1:
+            header[OVERRUNS] += 1
             return False
-        self.rows[written % self.depth] = row
-        self.header[0] = written + 1
+        number = int(header[LAST_SAMPLE]) + 1
+        self.rows[written % self.depth] = [number, *values]
+        header[LAST_SAMPLE] = number
+        header[WRITTEN] = written + 1
         return True
 
     def get(self) -> np.ndarray | None:
-        """The oldest row (a copy), or None when empty."""
-        read = int(self.header[1])
-        if read >= int(self.header[0]):
+        """The oldest row (a copy: sample number, then the raw value words), or None (and
+        an underrun counted) when empty."""
+        header = self.header
+        read = int(header[READ])
+        if read >= int(header[WRITTEN]):
+            header[UNDERRUNS] += 1
             return None
         row = self.rows[read % self.depth].copy()
-        self.header[1] = read + 1
+        header[READ] = read + 1
         return row
+
+    @property
+    def underruns(self) -> int:
+        return int(self.header[UNDERRUNS])
+
+    @property
+    def overruns(self) -> int:
+        return int(self.header[OVERRUNS])
 
 
 def decode(raw: np.ndarray, types: list[int]) -> list[int | float]:
-    """Raw slot bytes of one row's values -> Python values by HAL type."""
+    """Raw slot words of one row's values -> Python values by HAL type."""
     values: list[int | float] = []
     for word, hal_type in zip(raw, types, strict=True):
         if hal_type == HAL_FLOAT:
@@ -122,7 +176,11 @@ def encode(values: list[float | int], types: list[int]) -> list[int]:
 
 
 def parse_cfg(cfg: str) -> list[int]:
+    """A sampler/streamer ``cfg=`` string (``ffb``...) -> HAL types."""
     try:
-        return [CFG_TYPES[letter] for letter in cfg.lower()]
+        types = [CFG_TYPES[letter] for letter in cfg.lower()]
     except KeyError as exc:
         raise HalError(f"bad cfg letter {exc} (want f, b, s, u, l or k)") from None
+    if not 0 < len(types) <= MAX_COLUMNS:
+        raise HalError(f"cfg '{cfg}': 1 to {MAX_COLUMNS} letters")
+    return types

@@ -13,11 +13,11 @@ Realtime commands (loadrt, unloadrt) go to the realtime host, started on the fir
 from __future__ import annotations
 
 import contextlib
-import fnmatch
 import json
 import os
 import re
 import shlex
+import shutil
 import signal
 import socket
 import subprocess
@@ -27,6 +27,7 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any, TextIO
 
+from hal import show
 from hal.core import (
     HAL_IN,
     HAL_OUT,
@@ -65,6 +66,24 @@ USERSPACE_TOOLS = {
     "halstreamer": [sys.executable, "-m", "cnc", "hal", "stream"],
     "halui": [sys.executable, "-m", "cnc.halui"],
 }
+
+
+def userspace_command(args: list[str]) -> list[str]:
+    """What runs for ``loadusr PROGRAM ARGS``: our tool for LinuxCNC's HAL tools, and this
+    Python for a Python program (``python3 x.py`` or a file whose ``#!`` line names
+    python), so that its ``import hal`` is ours whatever interpreter its first line names."""
+    program, rest = args[0], args[1:]
+    if program in USERSPACE_TOOLS:
+        return [*USERSPACE_TOOLS[program], *rest]
+    if program in ("python", "python3"):
+        return [sys.executable, *rest]
+    path = shutil.which(program) if "/" not in program else program
+    if path is not None:
+        with contextlib.suppress(OSError), open(path, "rb") as handle:
+            first = handle.readline(256)
+            if first.startswith(b"#!") and b"python" in first:
+                return [sys.executable, path, *rest]
+    return args
 
 
 # ---------------------------------------------------------------- the realtime host
@@ -162,15 +181,6 @@ def tokenize(line: str) -> list[str]:
         raise HalError(f"bad quoting: {exc}") from None
 
 
-def match(pattern: str | None, name: str) -> bool:
-    """LinuxCNC's show/list patterns: glob when it has wildcards, else a name prefix."""
-    if not pattern:
-        return True
-    if any(ch in pattern for ch in "*?["):
-        return fnmatch.fnmatchcase(name, pattern)
-    return name.startswith(pattern)
-
-
 def logical_lines(lines: Iterable[str]) -> Iterable[tuple[int, str]]:
     """(first line number, text) with backslash continuations joined."""
     pending, start = "", 0
@@ -217,13 +227,29 @@ class HalCmd:
         # run in each loadusr'd program before exec (the launcher ties them to its life)
         self.child_setup: Callable[[], None] | None = None
         self.warned_names: set[str] = set()
+        #: this session's own HAL component (``join_hal``), "" when none
+        self.own_component = ""
         self.verbs: dict[str, Callable[[list[str]], None]] = {
-            name[3:].replace("_", ""): getattr(self, name)
-            for name in dir(self)
-            if name.startswith("do_")
+            name[3:]: getattr(self, name) for name in dir(self) if name.startswith("do_")
         }
 
     # ------------------------------------------------------------ running
+    def join_hal(self) -> None:
+        """Appear in HAL as user component ``halcmd<pid>`` while running, as LinuxCNC's
+        halcmd does (``show comp`` and ``list comp`` list it)."""
+        name = f"halcmd{os.getpid()}"
+        if name not in self.hal.meta["comps"]:
+            with self.hal.edit():
+                self.hal.new_component(name, "user")
+                self.hal.ready(name)
+            self.own_component = name
+
+    def leave_hal(self) -> None:
+        if self.own_component:
+            with contextlib.suppress(HalError):
+                self.hal.remove_component(self.own_component)
+            self.own_component = ""
+
     def error(self, cause: str) -> None:
         prefix = f"{self.where}: " if self.where else ""
         print(f"{prefix}{cause}", file=self.err, flush=True)
@@ -368,7 +394,7 @@ class HalCmd:
         if not args:
             raise HalError("loadusr: no program given")
         comp_name = comp_name or Path(args[0]).stem
-        args = [*USERSPACE_TOOLS.get(args[0], [args[0]]), *args[1:]]
+        args = userspace_command(args)
         try:
             proc = subprocess.Popen(args, stdin=subprocess.DEVNULL, preexec_fn=self.child_setup)
         except OSError as exc:
@@ -782,36 +808,45 @@ class HalCmd:
 
     # ------------------------------------------------------------ show / list / save
     def do_show(self, args: list[str]) -> None:
-        from hal import show
-
         if self.is_quiet:
             return
-        kind = args[0] if args else "all"
-        pattern = args[1] if len(args) > 1 else None
-        print(show.show(self.hal, kind, pattern, is_script=self.is_script), file=self.out, end="")
+        kind = args[0] if args else None
+        text = show.show(self.hal, kind, args[1:], is_script=self.is_script)
+        print(text, file=self.out, end="")
 
     def do_list(self, args: list[str]) -> None:
-        self._need(args, 1, 2, "list comp|pin|sig|param|funct|thread [pattern]")
-        from hal import show
-
+        if not args:
+            raise HalError("'list' requires type'")  # (sic)
         if self.is_quiet:
             return
-        print(show.listing(self.hal, args[0], args[1] if len(args) > 1 else None), file=self.out)
+        print(show.listing(self.hal, args[0], args[1:]), file=self.out, end="")
 
     def do_save(self, args: list[str]) -> None:
-        from hal import show
-
+        self._need(args, 0, 2, "save [type] [filename]")
         if self.is_quiet:
             return
-        kind = args[0] if args else "all"
-        modules = {}
-        if self.host.is_running():
-            modules = self.host.call({"cmd": "modules"}).get("modules", {})
-        text = show.save(self.hal, kind, modules)
+        text = show.save(self.hal, args[0] if args else "all")
         if len(args) > 1:
-            Path(args[1]).write_text(text, encoding="utf-8")
+            try:
+                Path(args[1]).write_text(text, encoding="utf-8")
+            except OSError:
+                raise HalError(f"Can't open 'save' destination '{args[1]}'") from None
         else:
             print(text, file=self.out, end="")
+
+    def do_setexact_for_test_suite_only(self, args: list[str]) -> None:
+        """Let thread periods be exactly what was asked for (ours always are): allowed
+        before the first thread only, as in LinuxCNC."""
+        with self.hal.edit() as meta:
+            if meta["threads"]:
+                raise HalError("HAL_LIB: Cannot run 'setexact' after a thread has been created")
+            meta["is_period_exact"] = True
+        print(
+            f"{self.where + ': ' if self.where else ''}HAL_LIB: HAL will pretend that the exact "
+            "base period requested is possible.\nThis mode is not suitable for running real "
+            "hardware.",
+            file=self.err,
+        )
 
     # ------------------------------------------------------------ interactive
     def interactive(self, stream: TextIO) -> int:
@@ -940,6 +975,7 @@ def make_session(opts: dict[str, Any], **kwargs: Any) -> HalCmd:
         **kwargs,
     )
     session.is_echo = opts["echo"]
+    session.join_hal()
     return session
 
 
@@ -1028,6 +1064,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return run_session(session, opts, words)
     finally:
+        session.leave_hal()
         if not session.host.is_running():
             release_if_unused(session.hal)
         session.hal.close()

@@ -77,6 +77,29 @@ def force_cleanup() -> None:
     remove_hal_objects()
 
 
+def realtime(argv: list[str]) -> int:
+    """``cnc hal realtime start|stop|restart|status``: LinuxCNC's ``realtime`` script.
+
+    As with LinuxCNC's userspace realtime, ``start`` has nothing to do (the first
+    ``loadrt`` starts the realtime host); ``stop`` makes the host unload everything and
+    exit, then removes the instance's HAL shared memory and semaphores (programs still
+    attached keep their mapping); ``status`` exits 0 while a host runs, else 1.
+    """
+    command = argv[0] if argv else ""
+    host = HostClient()
+    if command == "status":
+        return 0 if host.is_running() else 1
+    if command in ("stop", "restart"):
+        if host.is_running():
+            host.stop()
+        remove_hal_objects()
+        return 0
+    if command == "start":
+        return 0
+    print("usage: cnc hal realtime start|stop|restart|status", file=sys.stderr)
+    return 2
+
+
 def main(argv: list[str] | None = None) -> int:
     args = list(sys.argv[1:] if argv is None else argv)
     if "-U" in args:
@@ -109,6 +132,7 @@ def main(argv: list[str] | None = None) -> int:
             "halrun: Realtime already running.  Use 'halrun -U' to stop existing realtime session.",
             file=sys.stderr,
         )
+        session.leave_hal()
         session.hal.close()
         return 1
     status = 0
@@ -129,6 +153,7 @@ def main(argv: list[str] | None = None) -> int:
         session.verbosity, session.is_echo = VERBOSITY_ERRORS, False
         session.run_words(["stop"])
         session.run_words(["unload", "all"])
+        session.leave_hal()
         session.host.stop()
         release_if_unused(session.hal)
         session.hal.close()

@@ -16,7 +16,8 @@ between periods; threads also wake ``--spin-us`` early and busy-wait to the dead
 ``CNC_HAL_NO_RT=1``) turns them all off. The garbage collector is disabled (objects made
 while loading are frozen), so no collection pauses land in a period. Each thread publishes
 ``<thread>.time`` (pin) and ``<thread>.tmax`` (param) like LinuxCNC, plus
-``<thread>.overruns``: periods whose functions ran past the next deadline.
+an overrun count (periods whose functions ran past the next deadline; ``Hal.thread_overruns``,
+kept out of the parameter list so that halcmd's listings stay LinuxCNC's).
 """
 
 from __future__ import annotations
@@ -154,8 +155,7 @@ class RtThread(threading.Thread):
             # slots of the thread's timing pin and parameters
             self.time = hal.new_pin(comp, f"{name}.time", HAL_S32, HAL_OUT)
             self.tmax = hal.new_param(comp, f"{name}.tmax", HAL_S32, HAL_RW)
-            self.overruns = hal.new_param(comp, f"{name}.overruns", HAL_S32, HAL_RO)
-            hal.new_thread(comp, name, self.period, has_fp=has_fp)
+            self.overruns = hal.new_thread(comp, name, self.period, has_fp=has_fp)
             hal.ready(comp)
         #: when set (benchmarks), each period appends (deadline, start, end) in ns
         self.timing_log: list[tuple[int, int, int]] | None = None
@@ -252,6 +252,8 @@ class Host:
         self.modules: dict[str, LoadedModule] = {}
         self.functs: dict[str, _Funct] = {}
         self.threads: dict[str, RtThread] = {}
+        #: the clock period, set by the first thread (LinuxCNC's base period)
+        self.base_period: int | None = None
         self._warned: set[str] = set()
         self.is_exiting = threading.Event()
         set_shared_hal(hal)
@@ -415,6 +417,9 @@ class Host:
             raise HalError(f"{name}: not a HAL component (no COMPONENT or rtapi_app_main)")
         loaded.args = " ".join(words)
         self.modules[comp_name] = loaded
+        with self.hal.edit() as meta:
+            # what halcmd's ``save`` prints after ``loadrt NAME``: each argument and a space
+            meta["comps"][comp_name]["insmod_args"] = "".join(f"{word} " for word in words)
         self.hal.ready(comp_name)
 
     def _load_component(
@@ -470,11 +475,22 @@ class Host:
             raise HalError(f"duplicate thread name '{name}'")
         if period_ns < 1000:
             raise HalError(f"thread '{name}': period {period_ns} ns is too short")
-        periods = [t.period for t in self.threads.values()]
-        if periods and period_ns < min(periods):
-            # like LinuxCNC, the fastest thread comes first and sets the clock period
+        # As LinuxCNC: the first thread sets the clock period; later threads must be
+        # slower, and run at the nearest whole multiple of the clock period.
+        if self.base_period is None:
+            self.base_period = period_ns
+        if period_ns < self.base_period:
             raise HalError(
-                f"new thread period {period_ns} is less than clock period {min(periods)}"
+                f"HAL_LIB: ERROR: new thread period {period_ns} is less than clock period "
+                f"{self.base_period}"
+            )
+        asked = period_ns
+        period_ns = (period_ns + self.base_period // 2) // self.base_period * self.base_period
+        newest = list(self.threads.values())[-1].period if self.threads else 0
+        if period_ns < newest:
+            raise HalError(
+                f"HAL_LIB: ERROR: new thread period {asked} is less than existing thread "
+                f"period {newest}"
             )
         if cpu is None:
             cpu = self.cpu if self.cpu is not None else default_rt_cpu()

