@@ -75,9 +75,11 @@ __all__ = [
     "param",
     "pin",
     "shared_hal",
+    "sized",
 ]
 
 _shared: Hal | None = None
+MAX_PERSONALITIES = 64  # halcompile's personality table
 
 
 def shared_hal() -> Hal:
@@ -260,8 +262,9 @@ class _Decl:
         spec: str,
         name: str | None = None,
         *,
-        count: int | str | None = None,
+        count: int | str | Callable[[dict[str, Any]], int] | None = None,
         default: Any = 0,
+        when: Callable[[dict[str, Any]], Any] | None = None,
         doc: str = "",
     ) -> None:
         words = spec.split()
@@ -272,8 +275,18 @@ class _Decl:
         self.name = name
         self.count = count
         self.default = default
+        #: made only when ``when(options)`` is true (halcompile's ``if personality & 1``)
+        self.when = when
         self.doc = doc
         self.attr = ""
+
+    def count_for(self, options: dict[str, Any]) -> int | None:
+        """How many pins to make: None for one plain pin, else the array's size."""
+        if callable(self.count):
+            return int(self.count(options))
+        if isinstance(self.count, str):
+            return int(options[self.count])
+        return self.count
 
     def __set_name__(self, owner: type, attr: str) -> None:
         self.attr = attr
@@ -288,8 +301,26 @@ class _Decl:
         return [pattern.format(i) for i in range(count)]
 
 
+def sized(limit: int, size: Callable[[dict[str, Any]], int]) -> Callable[[dict[str, Any]], int]:
+    """halcompile's ``name-##[LIMIT : SIZE]`` as a ``count=``: SIZE (a function of the
+    options) pins, refused when it is above LIMIT."""
+
+    def count(options: dict[str, Any]) -> int:
+        wanted = int(size(options))
+        if wanted > limit:
+            raise HalError(f"Requested size {wanted} exceeds max size {limit}")
+        return max(wanted, 0)
+
+    return count
+
+
 def pin(spec: str, name: str | None = None, **kwargs: Any) -> Any:
-    """Declare a pin: ``pin("float in")``, ``pin("bit out", "is-on")``, ``count=4``."""
+    """Declare a pin: ``pin("float in")``, ``pin("bit out", "is-on")``, ``count=4``.
+
+    ``count`` may name a setup option or be a function of the options (``count=lambda o:
+    o["personality"] & 0xff``); ``when=`` (a function of the options) makes the pin only
+    when it returns true.
+    """
     decl = _Decl(spec, name, **kwargs)
     if decl.direction not in (HAL_IN, HAL_OUT, HAL_IO):
         raise ValueError(f"pin direction must be in, out or io, not '{spec}'")
@@ -327,12 +358,15 @@ def funct(name: str = "", *, has_fp: bool = True) -> Callable[[Callable], Callab
     return mark
 
 
-def module_funct(name: str, *, has_fp: bool = True) -> Callable[[Callable], Callable]:
+def module_funct(
+    name: str, *, has_fp: bool = True, full_name: str = ""
+) -> Callable[[Callable], Callable]:
     """Mark a classmethod ``f(cls, instances, period_ns)`` as one function for all instances,
-    named ``<module>.<name>`` (``stepgen.make-pulses``)."""
+    named ``<module>.<name>`` (``stepgen.make-pulses``), or ``full_name`` when given
+    (weighted_sum's ``process_wsums``)."""
 
     def mark(method: Callable) -> Callable:
-        _target(method)._hal_module_funct = (name, has_fp)
+        _target(method)._hal_module_funct = (name, has_fp, full_name)
         return method
 
     return mark
@@ -358,6 +392,11 @@ class RtComponent:
     #: the loadrt argument giving the count: ``num_chan`` for LinuxCNC's C modules
     #: (``count`` is accepted as well)
     count_option: ClassVar[str] = "count"
+    #: one instance named after the module (halcompile's ``option singleton``)
+    is_singleton: ClassVar[bool] = False
+    #: instances take a number from ``personality=`` (halcompile's ``option personality``)
+    has_personality: ClassVar[bool] = False
+    default_personality: ClassVar[int] = 0
 
     def setup(self, **options: Any) -> None:
         """Called once after the instance's pins exist (``self.hal``, ``self.comp`` are set)."""
@@ -371,15 +410,31 @@ class RtComponent:
 
         As LinuxCNC: ``count=N`` (``num_chan=N`` for the modules written in C, see
         ``count_option``) or ``names=a,b``, not both; neither, ``count=0`` or an empty
-        ``names=`` give ``default_count`` instances; ``max_count`` bounds both.
+        ``names=`` give ``default_count`` instances; ``max_count`` bounds both. A
+        singleton has one instance named after the module. With ``has_personality``,
+        ``personality=a,b,...`` gives each instance its number (option ``personality``):
+        the Nth value, else ``default_personality``, repeating every 64 instances.
         """
-        count_keys = {"count", cls.count_option}
-        unknown = set(args) - count_keys - {"names"} - set(cls.options)
+        count_keys = set() if cls.is_singleton else {"count", cls.count_option, "names"}
+        known = count_keys | set(cls.options) | ({"personality"} if cls.has_personality else set())
+        unknown = set(args) - known
         if unknown:
             raise HalError(f"{module}: unknown argument '{sorted(unknown)[0]}'")
         options = {
             key: cls.options[key](value) for key, value in args.items() if key in cls.options
         }
+        prefix = cls.prefix or module.removeprefix("hal_").replace("_", "-")
+        names = [prefix] if cls.is_singleton else cls._instance_names(module, args, prefix)
+        for name in names:
+            check_name("instance", name)
+        personalities = cls._personalities(module, args.get("personality", ""), len(names))
+        return [
+            (name, {**options, **({"personality": p} if cls.has_personality else {})})
+            for name, p in zip(names, personalities, strict=True)
+        ]
+
+    @classmethod
+    def _instance_names(cls, module: str, args: dict[str, str], prefix: str) -> list[str]:
         names = [n for n in args.get("names", "").split(",") if n]
         count_text = args.get(cls.count_option) or args.get("count") or "0"
         try:
@@ -396,12 +451,16 @@ class RtComponent:
                 f"{module}: ERROR: invalid {cls.count_option if count else 'number of names'}:"
                 f" {len(names) or count} (1 to {limit})"
             )
-        if not names:
-            prefix = cls.prefix or module.replace("_", "-")
-            names = [f"{prefix}.{i}" for i in range(count)]
-        for name in names:
-            check_name("instance", name)
-        return [(name, dict(options)) for name in names]
+        return names or [f"{prefix}.{i}" for i in range(count)]
+
+    @classmethod
+    def _personalities(cls, module: str, text: str, count: int) -> list[int]:
+        try:
+            given = [int(word, 0) for word in text.split(",") if word]
+        except ValueError:
+            raise HalError(f"{module}: personality={text} is not a list of numbers") from None
+        table = (given + [cls.default_personality] * MAX_PERSONALITIES)[:MAX_PERSONALITIES]
+        return [table[i % MAX_PERSONALITIES] for i in range(count)]
 
     def is_connected(self, attr: str) -> bool:
         """True when the pin declared as ``attr`` is linked to a signal."""
@@ -429,9 +488,10 @@ class RtComponent:
     def _create(cls, hal: Hal, comp: str, name: str, options: dict[str, Any] | None) -> RtComponent:
         attrs: dict[str, Any] = {}
         for decl in cls.declarations():
-            count = decl.count
-            if isinstance(count, str):
-                count = int((options or {})[count])
+            if decl.when is not None and not decl.when(options or {}):
+                attrs[decl.attr] = None  # not made for this instance
+                continue
+            count = decl.count_for(options or {})
             accessors = []
             for hal_name in decl.hal_names(count):
                 full = f"{name}.{hal_name}"
@@ -455,15 +515,21 @@ class RtComponent:
         return inst
 
     @classmethod
-    def functs(cls) -> list[tuple[str, bool, str, bool]]:
-        """(name, has_fp, method name, is_module_funct) for every marked method."""
+    def functs(cls) -> list[tuple[str, bool, str, str]]:
+        """(name, has_fp, method name, scope) for every marked method. Scope ``instance``:
+        the name follows the instance's (``pid.0.do-pid-calcs``); ``module``: the module's
+        prefix (``stepgen.make-pulses``); ``global``: the name is complete."""
         found = []
         for attr in dir(cls):
             method = getattr(cls, attr, None)
             if hasattr(method, "_hal_funct"):
-                found.append((*method._hal_funct, attr, False))
+                found.append((*method._hal_funct, attr, "instance"))
             elif hasattr(method, "_hal_module_funct"):
-                found.append((*method._hal_module_funct, attr, True))
+                name, has_fp, full_name = method._hal_module_funct
+                if full_name:
+                    found.append((full_name, has_fp, attr, "global"))
+                else:
+                    found.append((name, has_fp, attr, "module"))
         return found
 
 

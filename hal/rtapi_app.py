@@ -432,15 +432,16 @@ class Host:
             for inst_name, options in wanted:
                 inst = cls.create(self.hal, comp_name, inst_name, options)
                 loaded.instances.append(inst)
-                for fname, has_fp, method, is_module in cls.functs():
-                    if is_module:
+                for fname, has_fp, method, scope in cls.functs():
+                    if scope != "instance":
                         continue
                     full = f"{inst_name}.{fname}" if fname else inst_name
                     self.add_function(comp_name, full, getattr(inst, method), has_fp)
                     loaded.functs.append(full)
-            for fname, has_fp, method, is_module in cls.functs():
-                if is_module:
-                    full = f"{cls.prefix or comp_name.replace('_', '-')}.{fname}"
+            prefix = cls.prefix or comp_name.removeprefix("hal_").replace("_", "-")
+            for fname, has_fp, method, scope in cls.functs():
+                if scope != "instance":
+                    full = fname if scope == "global" else f"{prefix}.{fname}"
                     bound = getattr(cls, method)
                     instances = loaded.instances
                     self.add_function(
