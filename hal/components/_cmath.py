@@ -5,6 +5,7 @@ number) for NaN, infinities and values that do not fit."""
 from __future__ import annotations
 
 import math
+import struct
 
 S32_MIN, S32_MAX = -(1 << 31), (1 << 31) - 1
 S64_MIN, S64_MAX = -(1 << 63), (1 << 63) - 1
@@ -38,3 +39,14 @@ def c_div(a: int, b: int) -> int:
 def c_mod(a: int, b: int) -> int:
     """C's ``a % b``: the remainder has the sign of ``a``."""
     return a - b * c_div(a, b)
+
+
+_FLOAT = struct.Struct("f")
+
+
+def to_f32(value: float) -> float:
+    """A double stored in a C ``float`` (single precision), as some components keep state."""
+    try:
+        return _FLOAT.unpack(_FLOAT.pack(value))[0]
+    except OverflowError:
+        return math.copysign(math.inf, value)
