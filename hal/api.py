@@ -480,7 +480,8 @@ class RtComponent:
     def create(
         cls, hal: Hal, comp: str, name: str, options: dict[str, Any] | None = None
     ) -> RtComponent:
-        """Make one instance: its pins and parameters in HAL, then ``setup``."""
+        """Make one instance: its pins and parameters in HAL, named ``<name>.<pin>`` (or
+        just ``<pin>`` when ``name`` is ""), then ``setup``."""
         with hal.edit():  # one metadata update for all of the instance's pins
             return cls._create(hal, comp, name, options)
 
@@ -494,7 +495,7 @@ class RtComponent:
             count = decl.count_for(options or {})
             accessors = []
             for hal_name in decl.hal_names(count):
-                full = f"{name}.{hal_name}"
+                full = f"{name}.{hal_name}" if name else hal_name  # "": names of their own
                 if decl.is_pin:
                     slot = hal.new_pin(comp, full, decl.hal_type, decl.direction)
                 else:

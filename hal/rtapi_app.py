@@ -57,6 +57,10 @@ RECOMMENDED_MEMLOCK_KIB = 20480
 RT_PRIORITY = os.sched_get_priority_max(os.SCHED_FIFO)
 S32_MAX = (1 << 31) - 1
 COMPONENTS_ENV = "CNC_HAL_COMPONENTS"
+# Where the host finds the realtime modules ``loadrt NAME`` loads, in order: HAL's own
+# components, kinematics modules, then motion's ``motmod``. The host loads them by name
+# only; nothing in HAL imports them.
+MODULE_PACKAGES = ("hal.components", "motion.kinematics", "motion")
 NO_RT_ENV = "CNC_HAL_NO_RT"
 SPIN_ENV = "CNC_HAL_SPIN_US"
 # wake this long before each deadline and busy-wait to it (at most a quarter of the
@@ -358,6 +362,9 @@ class Host:
     # ------------------------------------------------------------ modules
     @staticmethod
     def import_module(name: str) -> Any:
+        """The realtime module ``loadrt NAME`` means: a file given by path, else NAME.py
+        in the folders of ``$CNC_HAL_COMPONENTS``, else in ``MODULE_PACKAGES`` (``-`` in
+        NAME read as ``_``: ``xyzac-trt-kins``)."""
         if name.endswith(".py") or "/" in name:
             path = Path(name)
             spec = importlib.util.spec_from_file_location(f"halcomp_{path.stem}", path)
@@ -370,12 +377,20 @@ class Host:
             candidate = Path(folder) / f"{name}.py"
             if candidate.is_file():
                 return Host.import_module(str(candidate))
-        try:
-            return importlib.import_module(f"hal.components.{name}")
-        except ModuleNotFoundError as exc:
-            if exc.name and exc.name.startswith("hal.components"):
-                raise HalError(f"{name}: realtime component not found") from None
-            raise
+        if not name or not all(c.isalnum() or c in "_-" for c in name):
+            raise HalError(f"{name}: realtime component not found")
+        file_name = name.replace("-", "_")
+        for package in MODULE_PACKAGES:
+            wanted = f"{package}.{file_name}"
+            try:
+                module = importlib.import_module(wanted)
+            except ModuleNotFoundError as exc:
+                if exc.name and wanted.startswith(exc.name):
+                    continue  # not in this package
+                raise
+            if hasattr(module, "rtapi_app_main") or hasattr(module, "COMPONENT"):
+                return module
+        raise HalError(f"{name}: realtime component not found")
 
     def loadrt(self, name: str, words: list[str], comp_name: str = "") -> None:
         """Load a realtime module; ``comp_name`` names its HAL component (default: module).
