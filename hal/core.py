@@ -31,7 +31,7 @@ from typing import Any
 import msgpack
 import posix_ipc
 
-from nml.ipcnames import ipc_name
+from nml.ipcnames import instance_objects, ipc_name
 
 # Types and directions with LinuxCNC's numeric values (hal.h).
 HAL_BIT, HAL_FLOAT, HAL_S32, HAL_U32, HAL_S64, HAL_U64 = 1, 2, 3, 4, 6, 7
@@ -134,6 +134,20 @@ def format_value(hal_type: int, value: int | float, *, is_show: bool = True) -> 
     if hal_type == HAL_U64 and is_show:
         return f"0x{int(value):016X}"
     return str(int(value))
+
+
+def remove_hal_objects() -> list[str]:
+    """Unlink this instance's HAL shared memory and semaphores; returns their names."""
+    prefix = ipc_name("hal", "")
+    removed = []
+    for name in instance_objects():
+        if not name.startswith(prefix):
+            continue
+        for unlink in (posix_ipc.unlink_shared_memory, posix_ipc.unlink_semaphore):
+            with contextlib.suppress(posix_ipc.ExistentialError):
+                unlink(name)
+                removed.append(name)
+    return removed
 
 
 def release_hal_mutex(instance: str | None = None) -> bool | None:

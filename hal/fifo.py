@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import contextlib
 import mmap
+import struct
 
-import numpy as np
 import posix_ipc
 
 from hal.core import HAL_BIT, HAL_FLOAT, HAL_S32, HAL_S64, HAL_U32, HAL_U64, HalError
@@ -23,6 +23,9 @@ WRITTEN, READ, DEPTH, WIDTH, UNDERRUNS, OVERRUNS, LAST_SAMPLE, MAGIC = range(8)
 HEADER = 8
 MAGIC_NUMBER = 0x48535452  # "HSTR"
 MAX_COLUMNS = 20  # LinuxCNC's HAL_STREAM_MAX_PINS
+WORD = struct.Struct("<q")  # (no numpy here: halsampler/halstreamer start in a blink)
+FLOAT = struct.Struct("<d")
+U64 = 1 << 64
 #: sampler/streamer config letters (LinuxCNC's, either case) -> HAL types
 CFG_TYPES = {
     "f": HAL_FLOAT,
@@ -57,16 +60,15 @@ class Fifo:
         self.name = name
         self._map = mmap.mmap(shm.fd, shm.size)
         shm.close_fd()
-        whole = np.frombuffer(self._map, dtype=np.int64)
-        self.header = whole[:HEADER]
-        if int(self.header[MAGIC]) != MAGIC_NUMBER:
+        self.words = memoryview(self._map).cast("q")
+        self.header = self.words[:HEADER]
+        if self.header[MAGIC] != MAGIC_NUMBER:
             self.close()
             raise HalError(f"'{name}' is not a HAL stream")
-        depth, width = int(self.header[DEPTH]), int(self.header[WIDTH])
+        depth, width = self.header[DEPTH], self.header[WIDTH]
         self.depth, self.width = depth, width
-        self.types = [int(t) for t in whole[HEADER : HEADER + width]]
-        start = HEADER + width
-        self.rows = whole[start : start + depth * (width + 1)].reshape(depth, width + 1)
+        self.types = list(self.words[HEADER : HEADER + width])
+        self._rows_start = HEADER + width  # row i: words[start + i * (width + 1)...]
 
     @classmethod
     def create(cls, channel: str, depth: int, types: list[int]) -> Fifo:
@@ -81,7 +83,7 @@ class Fifo:
         head = mmap.mmap(shm.fd, 8 * (HEADER + width))
         header = [0] * HEADER
         header[DEPTH], header[WIDTH], header[MAGIC] = depth, width, MAGIC_NUMBER
-        head[:] = np.array(header + list(types), dtype=np.int64).tobytes()
+        head[:] = struct.pack(f"<{HEADER + width}q", *header, *types)
         head.close()
         return cls(shm, name)
 
@@ -94,7 +96,11 @@ class Fifo:
         return cls(shm, fifo_name(channel))
 
     def close(self) -> None:
-        self.rows = self.header = None  # type: ignore[assignment]
+        if self.header is None:
+            return
+        self.header.release()
+        self.words.release()
+        self.header = self.words = None  # type: ignore[assignment]
         with contextlib.suppress(BufferError):
             self._map.close()
 
@@ -105,7 +111,7 @@ class Fifo:
     # ------------------------------------------------------------ both ends
     def count(self) -> int:
         """Rows waiting to be read."""
-        return int(self.header[WRITTEN] - self.header[READ])
+        return self.header[WRITTEN] - self.header[READ]
 
     @property
     def capacity(self) -> int:
@@ -118,45 +124,50 @@ class Fifo:
         """Append one row of raw value words, numbering it; False (and an overrun counted)
         when the FIFO is full."""
         header = self.header
-        written = int(header[WRITTEN])
-        if written - int(header[READ]) >= self.depth - 1:
+        written = header[WRITTEN]
+        if written - header[READ] >= self.depth - 1:
             header[OVERRUNS] += 1
             return False
-        number = int(header[LAST_SAMPLE]) + 1
-        self.rows[written % self.depth] = [number, *values]
+        number = header[LAST_SAMPLE] + 1
+        start = self._rows_start + (written % self.depth) * (self.width + 1)
+        words = self.words
+        words[start] = number
+        for offset, value in enumerate(values, start + 1):
+            words[offset] = value
         header[LAST_SAMPLE] = number
         header[WRITTEN] = written + 1
         return True
 
-    def get(self) -> np.ndarray | None:
+    def get(self) -> list[int] | None:
         """The oldest row (a copy: sample number, then the raw value words), or None (and
         an underrun counted) when empty."""
         header = self.header
-        read = int(header[READ])
-        if read >= int(header[WRITTEN]):
+        read = header[READ]
+        if read >= header[WRITTEN]:
             header[UNDERRUNS] += 1
             return None
-        row = self.rows[read % self.depth].copy()
+        start = self._rows_start + (read % self.depth) * (self.width + 1)
+        row = self.words[start : start + self.width + 1].tolist()
         header[READ] = read + 1
         return row
 
     @property
     def underruns(self) -> int:
-        return int(self.header[UNDERRUNS])
+        return self.header[UNDERRUNS]
 
     @property
     def overruns(self) -> int:
-        return int(self.header[OVERRUNS])
+        return self.header[OVERRUNS]
 
 
-def decode(raw: np.ndarray, types: list[int]) -> list[int | float]:
+def decode(raw: list[int], types: list[int]) -> list[int | float]:
     """Raw slot words of one row's values -> Python values by HAL type."""
     values: list[int | float] = []
     for word, hal_type in zip(raw, types, strict=True):
         if hal_type == HAL_FLOAT:
-            values.append(float(np.int64(word).view(np.float64)))
+            values.append(FLOAT.unpack(WORD.pack(word))[0])
         elif hal_type in (HAL_U32, HAL_U64):
-            values.append(int(np.int64(word).view(np.uint64)))
+            values.append(word % U64)
         else:
             values.append(int(word))
     return values
@@ -167,11 +178,12 @@ def encode(values: list[float | int], types: list[int]) -> list[int]:
     words = []
     for value, hal_type in zip(values, types, strict=True):
         if hal_type == HAL_FLOAT:
-            words.append(int(np.float64(value).view(np.int64)))
+            words.append(WORD.unpack(FLOAT.pack(float(value)))[0])
         elif hal_type == HAL_BIT:
             words.append(1 if value else 0)
         else:
-            words.append(int(np.uint64(int(value) % (1 << 64)).view(np.int64)))
+            word = int(value) % U64
+            words.append(word - U64 if word >= U64 // 2 else word)
     return words
 
 

@@ -16,12 +16,9 @@ import signal
 import sys
 import time
 
-import posix_ipc
-
-from hal.core import Hal, HalError, release_hal_mutex
-from hal.halcmd import VERBOSITY_ERRORS, HostClient, make_session, parse_options, run_session
-from hal.rtapi_app import release_if_unused
-from nml.ipcnames import instance_objects, ipc_name
+from hal.core import Hal, HalError, release_hal_mutex, remove_hal_objects
+from hal.halcmd import VERBOSITY_ERRORS, make_session, parse_options, run_session
+from hal.rtapi_app import HostClient, release_if_unused
 from nml.shmem import is_process_alive
 
 STOP_TIMEOUT_S = 3.0
@@ -56,48 +53,11 @@ def stop_processes(pids: set[int]) -> None:
                 os.kill(pid, signal.SIGKILL)
 
 
-def remove_hal_objects() -> list[str]:
-    """Unlink this instance's HAL shared memory and semaphores; returns their names."""
-    prefix = ipc_name("hal", "")
-    removed = []
-    for name in instance_objects():
-        if not name.startswith(prefix):
-            continue
-        for unlink in (posix_ipc.unlink_shared_memory, posix_ipc.unlink_semaphore):
-            with contextlib.suppress(posix_ipc.ExistentialError):
-                unlink(name)
-                removed.append(name)
-    return removed
-
-
 def force_cleanup() -> None:
     """halrun -U: leave no HAL of this instance behind, whatever state it is in."""
     release_hal_mutex()  # a crashed program may hold it; everything below needs it free
     stop_processes(hal_processes())
     remove_hal_objects()
-
-
-def realtime(argv: list[str]) -> int:
-    """``cnc hal realtime start|stop|restart|status``: LinuxCNC's ``realtime`` script.
-
-    As with LinuxCNC's userspace realtime, ``start`` has nothing to do (the first
-    ``loadrt`` starts the realtime host); ``stop`` makes the host unload everything and
-    exit, then removes the instance's HAL shared memory and semaphores (programs still
-    attached keep their mapping); ``status`` exits 0 while a host runs, else 1.
-    """
-    command = argv[0] if argv else ""
-    host = HostClient()
-    if command == "status":
-        return 0 if host.is_running() else 1
-    if command in ("stop", "restart"):
-        if host.is_running():
-            host.stop()
-        remove_hal_objects()
-        return 0
-    if command == "start":
-        return 0
-    print("usage: cnc hal realtime start|stop|restart|status", file=sys.stderr)
-    return 2
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -34,13 +34,14 @@ import resource
 import selectors
 import signal
 import socket
+import subprocess
 import sys
 import threading
 import time
 import traceback
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, TextIO
 
 from cnc.stdio import protect_output
 from hal.api import RtComponent, set_shared_hal
@@ -61,6 +62,7 @@ COMPONENTS_ENV = "CNC_HAL_COMPONENTS"
 # components, kinematics modules, then motion's ``motmod``. The host loads them by name
 # only; nothing in HAL imports them.
 MODULE_PACKAGES = ("hal.components", "motion.kinematics", "motion")
+HOST_START_TIMEOUT_S = 15.0  # (how long HostClient.ensure waits for a new host)
 NO_RT_ENV = "CNC_HAL_NO_RT"
 SPIN_ENV = "CNC_HAL_SPIN_US"
 # wake this long before each deadline and busy-wait to it (at most a quarter of the
@@ -658,6 +660,75 @@ def host_environment() -> dict[str, str]:
     cost no system call. Costs no speed measurably (scripts/bench/tp_bench.py).
     """
     return {**os.environ, "PYTHONMALLOC": os.environ.get("PYTHONMALLOC", "malloc")}
+
+
+class HostClient:
+    """Talks to the realtime host over its socket (halcmd's side); starts it when asked to."""
+
+    def __init__(self) -> None:
+        self.address = socket_address()
+        self.started: subprocess.Popen[bytes] | None = None
+
+    def is_running(self) -> bool:
+        try:
+            self.request({"cmd": "ping"})
+        except OSError:
+            return False
+        return True
+
+    def request(self, message: dict[str, Any], timeout: float = 60) -> dict[str, Any]:
+        with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as sock:
+            sock.settimeout(timeout)
+            sock.connect(self.address)
+            sock.sendall(json.dumps(message).encode() + b"\n")
+            data = b""
+            while not data.endswith(b"\n"):
+                chunk = sock.recv(65536)
+                if not chunk:
+                    raise OSError("realtime host closed the connection")
+                data += chunk
+        return json.loads(data)
+
+    def ensure(self, stderr: int | TextIO | None = None) -> None:
+        """Start ``python -m hal.rtapi_app`` unless one is already running."""
+        if self.is_running():
+            return
+        self.started = subprocess.Popen(
+            [sys.executable, "-m", "hal.rtapi_app"],
+            env=host_environment(),
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.DEVNULL,
+            stderr=stderr if stderr is not None else subprocess.DEVNULL,
+            start_new_session=True,
+        )
+        deadline = time.monotonic() + HOST_START_TIMEOUT_S
+        while time.monotonic() < deadline:
+            if self.started.poll() is not None:
+                raise HalError("realtime host exited without becoming ready")
+            if self.is_running():
+                return
+            time.sleep(0.02)
+        raise HalError("realtime host did not become ready")
+
+    def call(self, message: dict[str, Any]) -> dict[str, Any]:
+        try:
+            reply = self.request(message)
+        except OSError as exc:
+            raise HalError(f"realtime host not reachable: {exc}") from None
+        if not reply.get("ok"):
+            raise HalError(reply.get("error", "realtime host refused the command"))
+        return reply
+
+    def stop(self) -> None:
+        """Ask the host to exit and wait for it (when this process started it)."""
+        with contextlib.suppress(OSError):
+            self.request({"cmd": "exit"})
+        deadline = time.monotonic() + 10
+        while self.is_running() and time.monotonic() < deadline:
+            time.sleep(0.02)
+        if self.started is not None:
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                self.started.wait(timeout=10)
 
 
 def default_rt_cpu() -> int:

@@ -18,19 +18,28 @@ from __future__ import annotations
 import argparse
 import contextlib
 import os
+import re
 import signal
 import sys
 import time
 from collections.abc import Iterator
 from typing import Any, TextIO
 
-from hal.core import HAL_BIT, HAL_FLOAT, HAL_OUT, TYPE_NAMES, Hal, HalError, format_value
+from hal.core import (
+    HAL_BIT,
+    HAL_FLOAT,
+    HAL_OUT,
+    TYPE_NAMES,
+    Hal,
+    HalError,
+    format_value,
+    remove_hal_objects,
+)
 from hal.fifo import Fifo, decode, encode
-from hal.halcmd import HostClient
-from hal.halrun import realtime
 
 _CFG_LETTER = {"float": "f", "bit": "b", "s32": "s", "u32": "u", "s64": "l", "u64": "k"}
 POLL_S = 0.005
+_FIELD = re.compile(r"\S+")
 
 
 def _value_of(hal: Hal, name: str) -> str:
@@ -104,6 +113,8 @@ def _private_channel(
     module: str, thread: str, pins: list[str], hal: Hal, depth: int
 ) -> Iterator[tuple[str, list[int]]]:
     """Load a private sampler/streamer, net it to ``pins``, addf it; undo it all afterwards."""
+    from hal.rtapi_app import HostClient  # (here only: a plain sample/stream starts faster)
+
     host = HostClient()
     if not host.is_running():
         raise HalError("no realtime host is running")
@@ -192,13 +203,16 @@ def sample(argv: list[str]) -> int:
 
 def parse_stream_line(line: str, types: list[int]) -> list[int | float]:
     """One line of values as halstreamer reads it: whitespace-separated fields, one per
-    column (what follows them is ignored); ValueError(field index, cause) when bad."""
-    fields = line.split()
+    column, each followed by whitespace (so a last line without its newline is cut short,
+    as LinuxCNC finds it); what follows is ignored. ValueError(field index, cause) when
+    bad."""
+    fields = list(_FIELD.finditer(line))
     values: list[int | float] = []
     for index, hal_type in enumerate(types):
         if index >= len(fields):
-            raise ValueError(index, "premature end of line")
-        word = fields[index]
+            missing = "bit value not 0 or 1" if hal_type == HAL_BIT else "premature end of line"
+            raise ValueError(index, missing)
+        word = fields[index].group()
         try:
             if hal_type == HAL_FLOAT:
                 values.append(float(word))
@@ -212,6 +226,8 @@ def parse_stream_line(line: str, types: list[int]) -> list[int | float]:
             if exc.args and isinstance(exc.args[0], int):
                 raise
             raise ValueError(index, "bad character") from None
+        if fields[index].end() == len(line):
+            raise ValueError(index, "premature end of line")
     return values
 
 
@@ -272,6 +288,31 @@ def stream(argv: list[str]) -> int:
             lines.close()
         hal.close()
     return 0
+
+
+def realtime(argv: list[str]) -> int:
+    """``cnc hal realtime start|stop|restart|status``: LinuxCNC's ``realtime`` script.
+
+    As with LinuxCNC's userspace realtime, ``start`` has nothing to do (the first
+    ``loadrt`` starts the realtime host); ``stop`` makes the host unload everything and
+    exit, then removes the instance's HAL shared memory and semaphores (programs still
+    attached keep their mapping); ``status`` exits 0 while a host runs, else 1.
+    """
+    from hal.rtapi_app import HostClient  # (here only: the other tools start faster)
+
+    command = argv[0] if argv else ""
+    host = HostClient()
+    if command == "status":
+        return 0 if host.is_running() else 1
+    if command in ("stop", "restart"):
+        if host.is_running():
+            host.stop()
+        remove_hal_objects()
+        return 0
+    if command == "start":
+        return 0
+    print("usage: cnc hal realtime start|stop|restart|status", file=sys.stderr)
+    return 2
 
 
 def main(argv: list[str] | None = None) -> int:

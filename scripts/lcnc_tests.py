@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Run LinuxCNC 2.9's own regression tests (its ``tests/`` folder) against this controller.
 
-    .venv/bin/python scripts/lcnc_tests.py [-j N] [--timeout S] [--keep DIR] [TEST ...]
+    .venv/bin/python scripts/lcnc_tests.py [-j N] [--timeout S] [--checkout DIR] [-v] [TEST ...]
 
 The tests come from the LinuxCNC mirror (``git archive`` of the 2.9 branch into a scratch
 folder, or ``--checkout DIR`` to reuse one) and run as LinuxCNC's ``scripts/runtests`` runs

@@ -71,7 +71,7 @@ class Streamer(RtComponent):
         row = fifo.get()
         assert row is not None  # (one reader: nothing took the row since count())
         q, ptr = self.hal.q, self.hal.ptr
-        for slot, word in zip(self.slots, row[1:].tolist(), strict=True):
+        for slot, word in zip(self.slots, row[1:], strict=True):
             q[ptr[slot]] = word
 
 

@@ -7,7 +7,8 @@ import sys
 from pathlib import Path
 
 from hal.core import Hal
-from hal.halcmd import HostClient, run_ini_halfiles
+from hal.halcmd import run_ini_halfiles
+from hal.rtapi_app import HostClient
 from hal.rtapi_app import release_if_unused
 from tests.hal.halrun_util import FILES, halrun_text
 

@@ -100,3 +100,24 @@ def test_linuxcnc_halsampler_lines_run_our_tool(tmp_path: Path) -> None:
     result = halrun_text(tmp_path, text)
     assert result.returncode == 0, result.stderr
     assert result.stdout.splitlines() == ["42 ", "42 "]
+
+
+def test_halstreamer_reads_lines_as_linuxcnc(tmp_path: Path) -> None:
+    """Comments and bad lines are skipped with a message naming line and field; a last line
+    without its newline is cut short (LinuxCNC's halstreamer skips it too)."""
+    data = tmp_path / "in.txt"
+    data.write_text("# comment\n1 5\n\n0 x\n0 7\n1 8")  # messages as LinuxCNC 2.9's
+    text = (
+        "loadrt threads name1=servo-thread period1=1000000\n"
+        "loadrt streamer depth=10 cfg=bs\n"
+        "loadusr -w halstreamer in.txt\n"
+        "addf streamer.0 servo-thread\nstart\n" + SLEEP + "getp streamer.0.pin.1\n"
+    )
+    result = halrun_text(tmp_path, text)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.split() == ["7"]
+    assert result.stderr.splitlines() == [
+        "line 2, field 0: bit value not 0 or 1, skipping the line",
+        "line 3, field 1: bad character, skipping the line",
+        "line 5, field 1: premature end of line, skipping the line",
+    ]

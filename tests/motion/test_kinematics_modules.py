@@ -6,6 +6,8 @@ not against the module's own formulas. Switchable kinematics switch as LinuxCNC'
 
 from __future__ import annotations
 
+import contextlib
+import gc
 import math
 from pathlib import Path
 
@@ -384,3 +386,19 @@ def test_bare_trivkins_seen_through_fewer_joints() -> None:
     assert kins.forward([1, 2, 3]) == EmcPose(1, 2, 3)
     pose, joints = kins.home(EmcPose(), [4, 5, 6])
     assert joints == [4, 5, 6] and pose == EmcPose(4, 5, 6)
+
+
+# --------------------------------------------------------------- realtime hygiene
+def test_transformations_leave_no_cycles(collector_off) -> None:
+    """Motion calls them every servo period in a host without a garbage collector
+    (tests/motion/test_rt_garbage.py): they must leave no reference cycles behind."""
+    modules = [(name, *ROUND_TRIPS[name][::2]) for name in ROUND_TRIPS]
+    modules += [(name, {}, [EmcPose(300, 50, -300)]) for name in ("genserkins", "millturn")]
+    made = [(load_kinematics(name, **params), poses) for name, params, poses in modules]
+    gc.collect()
+    for kins, poses in made:
+        for _ in range(10):
+            for pose in poses:
+                with contextlib.suppress(KinematicsError):  # (a singular pose: as well)
+                    kins.forward(kins.inverse(pose))
+    assert gc.collect() == 0
