@@ -13,12 +13,15 @@ Realtime component (loaded into the host with ``loadrt NAME``; see hal/README.md
         def update(self, period: int) -> None:
             self.out = self.in0 and self.in1
 
-Userspace component (its own process), as with LinuxCNC's Python ``hal`` module::
+Userspace component (its own process)::
 
     c = component("mycomp")
     c.newpin("out", HAL_FLOAT, HAL_OUT)
     c.ready()
     c["out"] = 1.5
+
+(LinuxCNC's whole Python ``hal`` module, for scripts written for LinuxCNC, is
+``hal.pymodule``: ``import hal`` gives it.)
 """
 
 from __future__ import annotations
@@ -49,6 +52,7 @@ from hal.core import (
     TYPES_BY_NAME,
     Hal,
     HalError,
+    check_name,
 )
 
 __all__ = [
@@ -71,9 +75,11 @@ __all__ = [
     "param",
     "pin",
     "shared_hal",
+    "sized",
 ]
 
 _shared: Hal | None = None
+MAX_PERSONALITIES = 64  # halcompile's personality table
 
 
 def shared_hal() -> Hal:
@@ -256,8 +262,9 @@ class _Decl:
         spec: str,
         name: str | None = None,
         *,
-        count: int | str | None = None,
+        count: int | str | Callable[[dict[str, Any]], int] | None = None,
         default: Any = 0,
+        when: Callable[[dict[str, Any]], Any] | None = None,
         doc: str = "",
     ) -> None:
         words = spec.split()
@@ -268,8 +275,18 @@ class _Decl:
         self.name = name
         self.count = count
         self.default = default
+        #: made only when ``when(options)`` is true (halcompile's ``if personality & 1``)
+        self.when = when
         self.doc = doc
         self.attr = ""
+
+    def count_for(self, options: dict[str, Any]) -> int | None:
+        """How many pins to make: None for one plain pin, else the array's size."""
+        if callable(self.count):
+            return int(self.count(options))
+        if isinstance(self.count, str):
+            return int(options[self.count])
+        return self.count
 
     def __set_name__(self, owner: type, attr: str) -> None:
         self.attr = attr
@@ -284,8 +301,26 @@ class _Decl:
         return [pattern.format(i) for i in range(count)]
 
 
+def sized(limit: int, size: Callable[[dict[str, Any]], int]) -> Callable[[dict[str, Any]], int]:
+    """halcompile's ``name-##[LIMIT : SIZE]`` as a ``count=``: SIZE (a function of the
+    options) pins, refused when it is above LIMIT."""
+
+    def count(options: dict[str, Any]) -> int:
+        wanted = int(size(options))
+        if wanted > limit:
+            raise HalError(f"Requested size {wanted} exceeds max size {limit}")
+        return max(wanted, 0)
+
+    return count
+
+
 def pin(spec: str, name: str | None = None, **kwargs: Any) -> Any:
-    """Declare a pin: ``pin("float in")``, ``pin("bit out", "is-on")``, ``count=4``."""
+    """Declare a pin: ``pin("float in")``, ``pin("bit out", "is-on")``, ``count=4``.
+
+    ``count`` may name a setup option or be a function of the options (``count=lambda o:
+    o["personality"] & 0xff``); ``when=`` (a function of the options) makes the pin only
+    when it returns true.
+    """
     decl = _Decl(spec, name, **kwargs)
     if decl.direction not in (HAL_IN, HAL_OUT, HAL_IO):
         raise ValueError(f"pin direction must be in, out or io, not '{spec}'")
@@ -323,12 +358,15 @@ def funct(name: str = "", *, has_fp: bool = True) -> Callable[[Callable], Callab
     return mark
 
 
-def module_funct(name: str, *, has_fp: bool = True) -> Callable[[Callable], Callable]:
+def module_funct(
+    name: str, *, has_fp: bool = True, full_name: str = ""
+) -> Callable[[Callable], Callable]:
     """Mark a classmethod ``f(cls, instances, period_ns)`` as one function for all instances,
-    named ``<module>.<name>`` (``stepgen.make-pulses``)."""
+    named ``<module>.<name>`` (``stepgen.make-pulses``), or ``full_name`` when given
+    (weighted_sum's ``process_wsums``)."""
 
     def mark(method: Callable) -> Callable:
-        _target(method)._hal_module_funct = (name, has_fp)
+        _target(method)._hal_module_funct = (name, has_fp, full_name)
         return method
 
     return mark
@@ -347,6 +385,18 @@ class RtComponent:
     prefix: str = ""
     #: loadrt options besides count/names, with their converters, e.g. {"depth": int}
     options: ClassVar[dict[str, Callable[[str], Any]]] = {}
+    #: instances made without count=/names= (LinuxCNC's default_count / default_num_chan)
+    default_count: ClassVar[int] = 1
+    #: the most instances allowed (LinuxCNC's MAX_CHAN of modules written in C), or None
+    max_count: ClassVar[int | None] = None
+    #: the loadrt argument giving the count: ``num_chan`` for LinuxCNC's C modules
+    #: (``count`` is accepted as well)
+    count_option: ClassVar[str] = "count"
+    #: one instance named after the module (halcompile's ``option singleton``)
+    is_singleton: ClassVar[bool] = False
+    #: instances take a number from ``personality=`` (halcompile's ``option personality``)
+    has_personality: ClassVar[bool] = False
+    default_personality: ClassVar[int] = 0
 
     def setup(self, **options: Any) -> None:
         """Called once after the instance's pins exist (``self.hal``, ``self.comp`` are set)."""
@@ -356,27 +406,61 @@ class RtComponent:
 
     @classmethod
     def instances(cls, module: str, args: dict[str, str]) -> list[tuple[str, dict[str, Any]]]:
-        """(instance name, setup options) for each instance ``loadrt`` asks for."""
-        unknown = set(args) - {"count", "names"} - set(cls.options)
+        """(instance name, setup options) for each instance ``loadrt`` asks for.
+
+        As LinuxCNC: ``count=N`` (``num_chan=N`` for the modules written in C, see
+        ``count_option``) or ``names=a,b``, not both; neither, ``count=0`` or an empty
+        ``names=`` give ``default_count`` instances; ``max_count`` bounds both. A
+        singleton has one instance named after the module. With ``has_personality``,
+        ``personality=a,b,...`` gives each instance its number (option ``personality``):
+        the Nth value, else ``default_personality``, repeating every 64 instances.
+        """
+        count_keys = set() if cls.is_singleton else {"count", cls.count_option, "names"}
+        known = count_keys | set(cls.options) | ({"personality"} if cls.has_personality else set())
+        unknown = set(args) - known
         if unknown:
             raise HalError(f"{module}: unknown argument '{sorted(unknown)[0]}'")
-        if "count" in args and "names" in args:
-            raise HalError(f"{module}: count= and names= are mutually exclusive")
         options = {
             key: cls.options[key](value) for key, value in args.items() if key in cls.options
         }
-        if "names" in args:
-            names = [n for n in args["names"].split(",") if n]
-        else:
-            try:
-                count = int(args.get("count", "1"))
-            except ValueError:
-                raise HalError(f"{module}: count must be a number") from None
-            if count < 1:
-                raise HalError(f"{module}: count must be at least 1")
-            prefix = cls.prefix or module.replace("_", "-")
-            names = [f"{prefix}.{i}" for i in range(count)]
-        return [(name, dict(options)) for name in names]
+        prefix = cls.prefix or module.removeprefix("hal_").replace("_", "-")
+        names = [prefix] if cls.is_singleton else cls._instance_names(module, args, prefix)
+        for name in names:
+            check_name("instance", name)
+        personalities = cls._personalities(module, args.get("personality", ""), len(names))
+        return [
+            (name, {**options, **({"personality": p} if cls.has_personality else {})})
+            for name, p in zip(names, personalities, strict=True)
+        ]
+
+    @classmethod
+    def _instance_names(cls, module: str, args: dict[str, str], prefix: str) -> list[str]:
+        names = [n for n in args.get("names", "").split(",") if n]
+        count_text = args.get(cls.count_option) or args.get("count") or "0"
+        try:
+            count = int(count_text, 0)
+        except ValueError:
+            raise HalError(f"{module}: {cls.count_option}={count_text} is not a number") from None
+        if count and names:
+            raise HalError(f"{module}: {cls.count_option}= and names= are mutually exclusive")
+        if not count and not names:
+            count = cls.default_count
+        limit = cls.max_count
+        if limit is not None and not 0 < (len(names) or count) <= limit:
+            raise HalError(
+                f"{module}: ERROR: invalid {cls.count_option if count else 'number of names'}:"
+                f" {len(names) or count} (1 to {limit})"
+            )
+        return names or [f"{prefix}.{i}" for i in range(count)]
+
+    @classmethod
+    def _personalities(cls, module: str, text: str, count: int) -> list[int]:
+        try:
+            given = [int(word, 0) for word in text.split(",") if word]
+        except ValueError:
+            raise HalError(f"{module}: personality={text} is not a list of numbers") from None
+        table = (given + [cls.default_personality] * MAX_PERSONALITIES)[:MAX_PERSONALITIES]
+        return [table[i % MAX_PERSONALITIES] for i in range(count)]
 
     def is_connected(self, attr: str) -> bool:
         """True when the pin declared as ``attr`` is linked to a signal."""
@@ -396,7 +480,8 @@ class RtComponent:
     def create(
         cls, hal: Hal, comp: str, name: str, options: dict[str, Any] | None = None
     ) -> RtComponent:
-        """Make one instance: its pins and parameters in HAL, then ``setup``."""
+        """Make one instance: its pins and parameters in HAL, named ``<name>.<pin>`` (or
+        just ``<pin>`` when ``name`` is ""), then ``setup``."""
         with hal.edit():  # one metadata update for all of the instance's pins
             return cls._create(hal, comp, name, options)
 
@@ -404,12 +489,13 @@ class RtComponent:
     def _create(cls, hal: Hal, comp: str, name: str, options: dict[str, Any] | None) -> RtComponent:
         attrs: dict[str, Any] = {}
         for decl in cls.declarations():
-            count = decl.count
-            if isinstance(count, str):
-                count = int((options or {})[count])
+            if decl.when is not None and not decl.when(options or {}):
+                attrs[decl.attr] = None  # not made for this instance
+                continue
+            count = decl.count_for(options or {})
             accessors = []
             for hal_name in decl.hal_names(count):
-                full = f"{name}.{hal_name}"
+                full = f"{name}.{hal_name}" if name else hal_name  # "": names of their own
                 if decl.is_pin:
                     slot = hal.new_pin(comp, full, decl.hal_type, decl.direction)
                 else:
@@ -430,15 +516,21 @@ class RtComponent:
         return inst
 
     @classmethod
-    def functs(cls) -> list[tuple[str, bool, str, bool]]:
-        """(name, has_fp, method name, is_module_funct) for every marked method."""
+    def functs(cls) -> list[tuple[str, bool, str, str]]:
+        """(name, has_fp, method name, scope) for every marked method. Scope ``instance``:
+        the name follows the instance's (``pid.0.do-pid-calcs``); ``module``: the module's
+        prefix (``stepgen.make-pulses``); ``global``: the name is complete."""
         found = []
         for attr in dir(cls):
             method = getattr(cls, attr, None)
             if hasattr(method, "_hal_funct"):
-                found.append((*method._hal_funct, attr, False))
+                found.append((*method._hal_funct, attr, "instance"))
             elif hasattr(method, "_hal_module_funct"):
-                found.append((*method._hal_module_funct, attr, True))
+                name, has_fp, full_name = method._hal_module_funct
+                if full_name:
+                    found.append((full_name, has_fp, attr, "global"))
+                else:
+                    found.append((name, has_fp, attr, "module"))
         return found
 
 
@@ -540,40 +632,3 @@ def _exit_on_sigterm() -> None:
     is_main = threading.current_thread() is threading.main_thread()
     if is_main and signal.getsignal(signal.SIGTERM) is signal.SIG_DFL:
         signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))
-
-
-# ---------------------------------------------------------------- module-level helpers
-def component_exists(name: str) -> bool:
-    return name in shared_hal().meta["comps"]
-
-
-def component_is_ready(name: str) -> bool:
-    comp = shared_hal().meta["comps"].get(name)
-    return bool(comp and comp["is_ready"])
-
-
-def get_value(name: str) -> Any:
-    """The value of a pin, parameter or signal by name, like ``hal.get_value``."""
-    hal = shared_hal()
-    found = hal.find_pin(name)
-    if found:
-        value = hal.pin_value(found[1])
-        return bool(value) if found[1]["type"] == HAL_BIT else value
-    found = hal.find_param(name)
-    if found:
-        value = hal.read_slot(found[1]["type"], found[1]["slot"])
-        return bool(value) if found[1]["type"] == HAL_BIT else value
-    sig = hal.meta["sigs"].get(name)
-    if sig:
-        value = hal.read_slot(sig["type"], sig["slot"])
-        return bool(value) if sig["type"] == HAL_BIT else value
-    raise HalError(f"pin, parameter or signal '{name}' not found")
-
-
-def pin_has_writer(name: str) -> bool:
-    hal = shared_hal()
-    found = hal.find_pin(name)
-    if not found:
-        raise HalError(f"pin '{name}' not found")
-    sig = found[1]["sig"]
-    return bool(sig and hal.meta["sigs"][sig]["writers"] + hal.meta["sigs"][sig]["bidirs"])

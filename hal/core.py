@@ -31,7 +31,7 @@ from typing import Any
 import msgpack
 import posix_ipc
 
-from nml.ipcnames import ipc_name
+from nml.ipcnames import instance_objects, ipc_name
 
 # Types and directions with LinuxCNC's numeric values (hal.h).
 HAL_BIT, HAL_FLOAT, HAL_S32, HAL_U32, HAL_S64, HAL_U64 = 1, 2, 3, 4, 6, 7
@@ -134,6 +134,20 @@ def format_value(hal_type: int, value: int | float, *, is_show: bool = True) -> 
     if hal_type == HAL_U64 and is_show:
         return f"0x{int(value):016X}"
     return str(int(value))
+
+
+def remove_hal_objects() -> list[str]:
+    """Unlink this instance's HAL shared memory and semaphores; returns their names."""
+    prefix = ipc_name("hal", "")
+    removed = []
+    for name in instance_objects():
+        if not name.startswith(prefix):
+            continue
+        for unlink in (posix_ipc.unlink_shared_memory, posix_ipc.unlink_semaphore):
+            with contextlib.suppress(posix_ipc.ExistentialError):
+                unlink(name)
+                removed.append(name)
+    return removed
 
 
 def release_hal_mutex(instance: str | None = None) -> bool | None:
@@ -377,7 +391,7 @@ class Hal:
             for name in [n for n, t in meta["threads"].items() if t["owner"] == comp]:
                 for funct in meta["threads"][name]["functs"]:
                     meta["functs"][funct]["users"] -= 1
-                del meta["threads"][name]
+                meta["free"].append(meta["threads"].pop(name)["overruns_slot"])
             for table in ("pin_alias", "param_alias"):
                 owned = meta["pins"] if table == "pin_alias" else meta["params"]
                 meta[table] = {k: v for k, v in meta[table].items() if v in owned}
@@ -546,17 +560,29 @@ class Hal:
                 raise HalError(f"duplicate function '{name}'")
             meta["functs"][name] = {"owner": comp, "fp": has_fp, "users": 0}
 
-    def new_thread(self, comp: str, name: str, period_ns: int, *, has_fp: bool = True) -> None:
+    def new_thread(self, comp: str, name: str, period_ns: int, *, has_fp: bool = True) -> int:
+        """Declare a thread; returns the slot of its overrun counter (``thread_overruns``)."""
         check_name("thread", name)
         with self.edit() as meta:
             if name in meta["threads"]:
                 raise HalError(f"duplicate thread name '{name}'")
+            slot = self._alloc_slot(meta)
             meta["threads"][name] = {
                 "owner": comp,
                 "period": int(period_ns),
                 "fp": has_fp,
                 "functs": [],
+                "overruns_slot": slot,
             }
+        return slot
+
+    def thread_overruns(self, name: str) -> int:
+        """Periods of a thread whose functions ran past the next deadline (our addition to
+        LinuxCNC's HAL, kept out of its pin and parameter lists)."""
+        thread = self.meta["threads"].get(name)
+        if thread is None:
+            raise HalError(f"thread '{name}' not found")
+        return int(self.q[thread["overruns_slot"]])
 
     def add_funct(self, funct: str, thread: str, position: int = -1) -> None:
         with self.edit() as meta:

@@ -16,12 +16,9 @@ import signal
 import sys
 import time
 
-import posix_ipc
-
-from hal.core import Hal, HalError, release_hal_mutex
-from hal.halcmd import VERBOSITY_ERRORS, HostClient, make_session, parse_options, run_session
-from hal.rtapi_app import release_if_unused
-from nml.ipcnames import instance_objects, ipc_name
+from hal.core import Hal, HalError, release_hal_mutex, remove_hal_objects
+from hal.halcmd import VERBOSITY_ERRORS, make_session, parse_options, run_session
+from hal.rtapi_app import HostClient, release_if_unused
 from nml.shmem import is_process_alive
 
 STOP_TIMEOUT_S = 3.0
@@ -54,20 +51,6 @@ def stop_processes(pids: set[int]) -> None:
         if is_process_alive(pid):
             with contextlib.suppress(ProcessLookupError, PermissionError):
                 os.kill(pid, signal.SIGKILL)
-
-
-def remove_hal_objects() -> list[str]:
-    """Unlink this instance's HAL shared memory and semaphores; returns their names."""
-    prefix = ipc_name("hal", "")
-    removed = []
-    for name in instance_objects():
-        if not name.startswith(prefix):
-            continue
-        for unlink in (posix_ipc.unlink_shared_memory, posix_ipc.unlink_semaphore):
-            with contextlib.suppress(posix_ipc.ExistentialError):
-                unlink(name)
-                removed.append(name)
-    return removed
 
 
 def force_cleanup() -> None:
@@ -109,6 +92,7 @@ def main(argv: list[str] | None = None) -> int:
             "halrun: Realtime already running.  Use 'halrun -U' to stop existing realtime session.",
             file=sys.stderr,
         )
+        session.leave_hal()
         session.hal.close()
         return 1
     status = 0
@@ -129,6 +113,7 @@ def main(argv: list[str] | None = None) -> int:
         session.verbosity, session.is_echo = VERBOSITY_ERRORS, False
         session.run_words(["stop"])
         session.run_words(["unload", "all"])
+        session.leave_hal()
         session.host.stop()
         release_if_unused(session.hal)
         session.hal.close()

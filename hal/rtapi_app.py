@@ -16,7 +16,8 @@ between periods; threads also wake ``--spin-us`` early and busy-wait to the dead
 ``CNC_HAL_NO_RT=1``) turns them all off. The garbage collector is disabled (objects made
 while loading are frozen), so no collection pauses land in a period. Each thread publishes
 ``<thread>.time`` (pin) and ``<thread>.tmax`` (param) like LinuxCNC, plus
-``<thread>.overruns``: periods whose functions ran past the next deadline.
+an overrun count (periods whose functions ran past the next deadline; ``Hal.thread_overruns``,
+kept out of the parameter list so that halcmd's listings stay LinuxCNC's).
 """
 
 from __future__ import annotations
@@ -33,13 +34,14 @@ import resource
 import selectors
 import signal
 import socket
+import subprocess
 import sys
 import threading
 import time
 import traceback
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, TextIO
 
 from cnc.stdio import protect_output
 from hal.api import RtComponent, set_shared_hal
@@ -56,6 +58,11 @@ RECOMMENDED_MEMLOCK_KIB = 20480
 RT_PRIORITY = os.sched_get_priority_max(os.SCHED_FIFO)
 S32_MAX = (1 << 31) - 1
 COMPONENTS_ENV = "CNC_HAL_COMPONENTS"
+# Where the host finds the realtime modules ``loadrt NAME`` loads, in order: HAL's own
+# components, kinematics modules, then motion's ``motmod``. The host loads them by name
+# only; nothing in HAL imports them.
+MODULE_PACKAGES = ("hal.components", "motion.kinematics", "motion")
+HOST_START_TIMEOUT_S = 15.0  # (how long HostClient.ensure waits for a new host)
 NO_RT_ENV = "CNC_HAL_NO_RT"
 SPIN_ENV = "CNC_HAL_SPIN_US"
 # wake this long before each deadline and busy-wait to it (at most a quarter of the
@@ -154,8 +161,7 @@ class RtThread(threading.Thread):
             # slots of the thread's timing pin and parameters
             self.time = hal.new_pin(comp, f"{name}.time", HAL_S32, HAL_OUT)
             self.tmax = hal.new_param(comp, f"{name}.tmax", HAL_S32, HAL_RW)
-            self.overruns = hal.new_param(comp, f"{name}.overruns", HAL_S32, HAL_RO)
-            hal.new_thread(comp, name, self.period, has_fp=has_fp)
+            self.overruns = hal.new_thread(comp, name, self.period, has_fp=has_fp)
             hal.ready(comp)
         #: when set (benchmarks), each period appends (deadline, start, end) in ns
         self.timing_log: list[tuple[int, int, int]] | None = None
@@ -253,6 +259,8 @@ class Host:
         self.modules: dict[str, LoadedModule] = {}
         self.functs: dict[str, _Funct] = {}
         self.threads: dict[str, RtThread] = {}
+        #: the clock period, set by the first thread (LinuxCNC's base period)
+        self.base_period: int | None = None
         self._warned: set[str] = set()
         self.is_exiting = threading.Event()
         set_shared_hal(hal)
@@ -357,6 +365,9 @@ class Host:
     # ------------------------------------------------------------ modules
     @staticmethod
     def import_module(name: str) -> Any:
+        """The realtime module ``loadrt NAME`` means: a file given by path, else NAME.py
+        in the folders of ``$CNC_HAL_COMPONENTS``, else in ``MODULE_PACKAGES`` (``-`` in
+        NAME read as ``_``: ``xyzac-trt-kins``)."""
         if name.endswith(".py") or "/" in name:
             path = Path(name)
             spec = importlib.util.spec_from_file_location(f"halcomp_{path.stem}", path)
@@ -369,12 +380,20 @@ class Host:
             candidate = Path(folder) / f"{name}.py"
             if candidate.is_file():
                 return Host.import_module(str(candidate))
-        try:
-            return importlib.import_module(f"hal.components.{name}")
-        except ModuleNotFoundError as exc:
-            if exc.name and exc.name.startswith("hal.components"):
-                raise HalError(f"{name}: realtime component not found") from None
-            raise
+        if not name or not all(c.isalnum() or c in "_-" for c in name):
+            raise HalError(f"{name}: realtime component not found")
+        file_name = name.replace("-", "_")
+        for package in MODULE_PACKAGES:
+            wanted = f"{package}.{file_name}"
+            try:
+                module = importlib.import_module(wanted)
+            except ModuleNotFoundError as exc:
+                if exc.name and wanted.startswith(exc.name):
+                    continue  # not in this package
+                raise
+            if hasattr(module, "rtapi_app_main") or hasattr(module, "COMPONENT"):
+                return module
+        raise HalError(f"{name}: realtime component not found")
 
     def loadrt(self, name: str, words: list[str], comp_name: str = "") -> None:
         """Load a realtime module; ``comp_name`` names its HAL component (default: module).
@@ -418,6 +437,9 @@ class Host:
         if hasattr(module, "rtapi_app_exit"):  # LinuxCNC's unload hook of such modules
             loaded.exit = lambda: module.rtapi_app_exit(self, comp_name)
         self.modules[comp_name] = loaded
+        with self.hal.edit() as meta:
+            # what halcmd's ``save`` prints after ``loadrt NAME``: each argument and a space
+            meta["comps"][comp_name]["insmod_args"] = "".join(f"{word} " for word in words)
         self.hal.ready(comp_name)
 
     def _load_component(
@@ -430,15 +452,16 @@ class Host:
             for inst_name, options in wanted:
                 inst = cls.create(self.hal, comp_name, inst_name, options)
                 loaded.instances.append(inst)
-                for fname, has_fp, method, is_module in cls.functs():
-                    if is_module:
+                for fname, has_fp, method, scope in cls.functs():
+                    if scope != "instance":
                         continue
                     full = f"{inst_name}.{fname}" if fname else inst_name
                     self.add_function(comp_name, full, getattr(inst, method), has_fp)
                     loaded.functs.append(full)
-            for fname, has_fp, method, is_module in cls.functs():
-                if is_module:
-                    full = f"{cls.prefix or comp_name.replace('_', '-')}.{fname}"
+            prefix = cls.prefix or comp_name.removeprefix("hal_").replace("_", "-")
+            for fname, has_fp, method, scope in cls.functs():
+                if scope != "instance":
+                    full = fname if scope == "global" else f"{prefix}.{fname}"
                     bound = getattr(cls, method)
                     instances = loaded.instances
                     self.add_function(
@@ -473,11 +496,22 @@ class Host:
             raise HalError(f"duplicate thread name '{name}'")
         if period_ns < 1000:
             raise HalError(f"thread '{name}': period {period_ns} ns is too short")
-        periods = [t.period for t in self.threads.values()]
-        if periods and period_ns < min(periods):
-            # like LinuxCNC, the fastest thread comes first and sets the clock period
+        # As LinuxCNC: the first thread sets the clock period; later threads must be
+        # slower, and run at the nearest whole multiple of the clock period.
+        if self.base_period is None:
+            self.base_period = period_ns
+        if period_ns < self.base_period:
             raise HalError(
-                f"new thread period {period_ns} is less than clock period {min(periods)}"
+                f"HAL_LIB: ERROR: new thread period {period_ns} is less than clock period "
+                f"{self.base_period}"
+            )
+        asked = period_ns
+        period_ns = (period_ns + self.base_period // 2) // self.base_period * self.base_period
+        newest = list(self.threads.values())[-1].period if self.threads else 0
+        if period_ns < newest:
+            raise HalError(
+                f"HAL_LIB: ERROR: new thread period {asked} is less than existing thread "
+                f"period {newest}"
             )
         if cpu is None:
             cpu = self.cpu if self.cpu is not None else default_rt_cpu()
@@ -634,6 +668,75 @@ def host_environment() -> dict[str, str]:
     cost no system call. Costs no speed measurably (scripts/bench/tp_bench.py).
     """
     return {**os.environ, "PYTHONMALLOC": os.environ.get("PYTHONMALLOC", "malloc")}
+
+
+class HostClient:
+    """Talks to the realtime host over its socket (halcmd's side); starts it when asked to."""
+
+    def __init__(self) -> None:
+        self.address = socket_address()
+        self.started: subprocess.Popen[bytes] | None = None
+
+    def is_running(self) -> bool:
+        try:
+            self.request({"cmd": "ping"})
+        except OSError:
+            return False
+        return True
+
+    def request(self, message: dict[str, Any], timeout: float = 60) -> dict[str, Any]:
+        with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as sock:
+            sock.settimeout(timeout)
+            sock.connect(self.address)
+            sock.sendall(json.dumps(message).encode() + b"\n")
+            data = b""
+            while not data.endswith(b"\n"):
+                chunk = sock.recv(65536)
+                if not chunk:
+                    raise OSError("realtime host closed the connection")
+                data += chunk
+        return json.loads(data)
+
+    def ensure(self, stderr: int | TextIO | None = None) -> None:
+        """Start ``python -m hal.rtapi_app`` unless one is already running."""
+        if self.is_running():
+            return
+        self.started = subprocess.Popen(
+            [sys.executable, "-m", "hal.rtapi_app"],
+            env=host_environment(),
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.DEVNULL,
+            stderr=stderr if stderr is not None else subprocess.DEVNULL,
+            start_new_session=True,
+        )
+        deadline = time.monotonic() + HOST_START_TIMEOUT_S
+        while time.monotonic() < deadline:
+            if self.started.poll() is not None:
+                raise HalError("realtime host exited without becoming ready")
+            if self.is_running():
+                return
+            time.sleep(0.02)
+        raise HalError("realtime host did not become ready")
+
+    def call(self, message: dict[str, Any]) -> dict[str, Any]:
+        try:
+            reply = self.request(message)
+        except OSError as exc:
+            raise HalError(f"realtime host not reachable: {exc}") from None
+        if not reply.get("ok"):
+            raise HalError(reply.get("error", "realtime host refused the command"))
+        return reply
+
+    def stop(self) -> None:
+        """Ask the host to exit and wait for it (when this process started it)."""
+        with contextlib.suppress(OSError):
+            self.request({"cmd": "exit"})
+        deadline = time.monotonic() + 10
+        while self.is_running() and time.monotonic() < deadline:
+            time.sleep(0.02)
+        if self.started is not None:
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                self.started.wait(timeout=10)
 
 
 def default_rt_cpu() -> int:

@@ -9,6 +9,8 @@
 - ``cnc hal stream [-c CHAN] [FILE]``: like halstreamer, feed lines of values into a loaded
   ``streamer`` channel. ``cnc hal stream -T THREAD [-i FILE] PIN...`` wires a private
   streamer to the given input pins, plays the file once, then removes everything.
+- ``cnc hal realtime start|stop|restart|status``: LinuxCNC's ``realtime`` script (``stop``
+  ends the realtime host and removes the instance's HAL).
 """
 
 from __future__ import annotations
@@ -16,18 +18,28 @@ from __future__ import annotations
 import argparse
 import contextlib
 import os
+import re
 import signal
 import sys
 import time
 from collections.abc import Iterator
 from typing import Any, TextIO
 
-from hal.core import HAL_FLOAT, HAL_IN, HAL_OUT, TYPE_NAMES, Hal, HalError, format_value
+from hal.core import (
+    HAL_BIT,
+    HAL_FLOAT,
+    HAL_OUT,
+    TYPE_NAMES,
+    Hal,
+    HalError,
+    format_value,
+    remove_hal_objects,
+)
 from hal.fifo import Fifo, decode, encode
-from hal.halcmd import HostClient
 
 _CFG_LETTER = {"float": "f", "bit": "b", "s32": "s", "u32": "u", "s64": "l", "u64": "k"}
 POLL_S = 0.005
+_FIELD = re.compile(r"\S+")
 
 
 def _value_of(hal: Hal, name: str) -> str:
@@ -68,39 +80,32 @@ def watch(argv: list[str]) -> int:
 
 def _format_row(row: Any, types: list[int], is_tagged: bool) -> str:
     values = decode(row[1:], types)
-    words = [str(int(row[0]))] if is_tagged else []
+    # halsampler's tag counts from 0 (the FIFO numbers rows from 1)
+    words = [str(int(row[0]) - 1)] if is_tagged else []
     # halsampler's layout: floats with six decimals, each value followed by a space
     words += [f"{v:f}" if isinstance(v, float) else str(v) for v in values]
     return "".join(f"{word} " for word in words)
 
 
-def read_samples(fifo: Fifo, types: list[int], out: TextIO, count: int, is_tagged: bool) -> int:
-    """Copy rows until ``count`` (0: forever); prints 'overrun' at gaps like halsampler."""
+def read_samples(fifo: Fifo, out: TextIO, count: int, is_tagged: bool) -> int:
+    """Copy rows until ``count`` (0: forever); prints 'overrun' where rows were lost, as
+    halsampler does."""
     done = 0
-    expected = None
+    last_sample = 0
     while not count or done < count:
-        row = fifo.get()
-        if row is None:
+        if not fifo.count():
             time.sleep(POLL_S)
             continue
-        if expected is not None and int(row[0]) != expected:
+        row = fifo.get()
+        assert row is not None
+        last_sample += 1
+        if int(row[0]) != last_sample:
             print("overrun", file=out)
-        expected = int(row[0]) + 1
-        print(_format_row(row, types, is_tagged), file=out)
+            last_sample = int(row[0])
+        print(_format_row(row, fifo.types, is_tagged), file=out)
         done += 1
     out.flush()
     return done
-
-
-def _channel_types(hal: Hal, channel: str, direction: int) -> list[int]:
-    types = []
-    while (found := hal.find_pin(f"{channel}.pin.{len(types)}")) is not None:
-        if found[1]["dir"] != direction:
-            break
-        types.append(found[1]["type"])
-    if not types:
-        raise HalError(f"channel '{channel}' not found")
-    return types
 
 
 @contextlib.contextmanager
@@ -108,6 +113,8 @@ def _private_channel(
     module: str, thread: str, pins: list[str], hal: Hal, depth: int
 ) -> Iterator[tuple[str, list[int]]]:
     """Load a private sampler/streamer, net it to ``pins``, addf it; undo it all afterwards."""
+    from hal.rtapi_app import HostClient  # (here only: a plain sample/stream starts faster)
+
     host = HostClient()
     if not host.is_running():
         raise HalError("no realtime host is running")
@@ -168,20 +175,18 @@ def sample(argv: list[str]) -> int:
         if opts.thread:
             if opts.output:
                 out = open(opts.output, "w", encoding="utf-8")  # noqa: SIM115
-            with _private_channel("sampler", opts.thread, opts.args, hal, 16384) as (ch, types):
+            with _private_channel("sampler", opts.thread, opts.args, hal, 16384) as (ch, _):
                 fifo = Fifo.open(ch)
                 try:
-                    read_samples(fifo, types, out, opts.count, opts.is_tagged)
+                    read_samples(fifo, out, opts.count, opts.is_tagged)
                 finally:
                     fifo.close()
         else:
             if opts.args:
                 out = open(opts.args[0], "w", encoding="utf-8")  # noqa: SIM115
-            channel = f"sampler.{opts.channel}"
-            types = _channel_types(hal, channel, HAL_IN)
-            fifo = Fifo.open(channel)
+            fifo = Fifo.open(f"sampler.{opts.channel}")
             try:
-                read_samples(fifo, types, out, opts.count, opts.is_tagged)
+                read_samples(fifo, out, opts.count, opts.is_tagged)
             finally:
                 fifo.close()
     except HalError as exc:
@@ -196,25 +201,53 @@ def sample(argv: list[str]) -> int:
     return 0
 
 
-def write_stream(fifo: Fifo, types: list[int], lines: TextIO, source: str) -> int:
-    """Push every line of values into the FIFO (waiting when full); returns rows sent."""
-    sent = 0
-    for number, line in enumerate(lines, 1):
-        words = line.split()
-        if not words or words[0].startswith("#"):
-            continue
-        if len(words) != len(types):
-            raise HalError(f"{source}:{number}: {len(words)} values, expected {len(types)}")
+def parse_stream_line(line: str, types: list[int]) -> list[int | float]:
+    """One line of values as halstreamer reads it: whitespace-separated fields, one per
+    column, each followed by whitespace (so a last line without its newline is cut short,
+    as LinuxCNC finds it); what follows is ignored. ValueError(field index, cause) when
+    bad."""
+    fields = list(_FIELD.finditer(line))
+    values: list[int | float] = []
+    for index, hal_type in enumerate(types):
+        if index >= len(fields):
+            missing = "bit value not 0 or 1" if hal_type == HAL_BIT else "premature end of line"
+            raise ValueError(index, missing)
+        word = fields[index].group()
         try:
-            values = [
-                float(w) if t == HAL_FLOAT else int(float(w))
-                for w, t in zip(words, types, strict=True)
-            ]
-        except ValueError:
-            raise HalError(f"{source}:{number}: bad number in '{line.strip()}'") from None
-        row = [sent, *encode(values, types)]
-        while not fifo.put(row):
+            if hal_type == HAL_FLOAT:
+                values.append(float(word))
+            elif hal_type == HAL_BIT:
+                if word not in ("0", "1"):
+                    raise ValueError(index, "bit value not 0 or 1")
+                values.append(int(word))
+            else:
+                values.append(int(word, 10))
+        except ValueError as exc:
+            if exc.args and isinstance(exc.args[0], int):
+                raise
+            raise ValueError(index, "bad character") from None
+        if fields[index].end() == len(line):
+            raise ValueError(index, "premature end of line")
+    return values
+
+
+def write_stream(fifo: Fifo, lines: TextIO) -> int:
+    """Push every line of values into the FIFO, waiting while it is full; returns rows
+    sent. As halstreamer: lines starting with ``#`` are comments, a bad line is reported
+    on stderr (lines counted from 0) and skipped."""
+    sent = 0
+    for number, line in enumerate(lines):
+        if line.startswith("#"):
+            continue
+        try:
+            values = parse_stream_line(line, fifo.types)
+        except ValueError as exc:
+            field, cause = exc.args
+            print(f"line {number}, field {field}: {cause}, skipping the line", file=sys.stderr)
+            continue
+        while not fifo.is_writable():
             time.sleep(POLL_S)
+        fifo.put(encode(values, fifo.types))
         sent += 1
     return sent
 
@@ -233,20 +266,18 @@ def stream(argv: list[str]) -> int:
         if source:
             lines = open(source, encoding="utf-8")  # noqa: SIM115
         if opts.thread:
-            with _private_channel("streamer", opts.thread, opts.args, hal, 4096) as (ch, types):
+            with _private_channel("streamer", opts.thread, opts.args, hal, 4096) as (ch, _):
                 fifo = Fifo.open(ch)
                 try:
-                    write_stream(fifo, types, lines, source or "<stdin>")
+                    write_stream(fifo, lines)
                     while fifo.count():
                         time.sleep(POLL_S)  # wait until the thread has played everything
                 finally:
                     fifo.close()
         else:
-            channel = f"streamer.{opts.channel}"
-            types = _channel_types(hal, channel, HAL_OUT)
-            fifo = Fifo.open(channel)
+            fifo = Fifo.open(f"streamer.{opts.channel}")
             try:
-                write_stream(fifo, types, lines, source or "<stdin>")
+                write_stream(fifo, lines)
             finally:
                 fifo.close()
     except (HalError, OSError) as exc:
@@ -259,9 +290,34 @@ def stream(argv: list[str]) -> int:
     return 0
 
 
+def realtime(argv: list[str]) -> int:
+    """``cnc hal realtime start|stop|restart|status``: LinuxCNC's ``realtime`` script.
+
+    As with LinuxCNC's userspace realtime, ``start`` has nothing to do (the first
+    ``loadrt`` starts the realtime host); ``stop`` makes the host unload everything and
+    exit, then removes the instance's HAL shared memory and semaphores (programs still
+    attached keep their mapping); ``status`` exits 0 while a host runs, else 1.
+    """
+    from hal.rtapi_app import HostClient  # (here only: the other tools start faster)
+
+    command = argv[0] if argv else ""
+    host = HostClient()
+    if command == "status":
+        return 0 if host.is_running() else 1
+    if command in ("stop", "restart"):
+        if host.is_running():
+            host.stop()
+        remove_hal_objects()
+        return 0
+    if command == "start":
+        return 0
+    print("usage: cnc hal realtime start|stop|restart|status", file=sys.stderr)
+    return 2
+
+
 def main(argv: list[str] | None = None) -> int:
     args = list(sys.argv[1:] if argv is None else argv)
-    tools = {"watch": watch, "sample": sample, "stream": stream}
+    tools = {"watch": watch, "sample": sample, "stream": stream, "realtime": realtime}
     if not args or args[0] not in tools:
         print(__doc__, file=sys.stderr if args else sys.stdout)
         return 2 if args else 0

@@ -4,7 +4,9 @@ Plain Python objects with no process, NML or HAL dependency, driven once per ser
 period by the realtime motion component:
 
 - ``motion.pose``: ``EmcPose`` (x y z a b c u v w) and axis letters.
-- ``motion.kinematics``: kinematics modules loaded by name (trivkins, corexy, bipod).
+- ``motion.kinematics``: kinematics modules loaded by name, one file each named as
+  LinuxCNC's module (trivkins, corexykins, xyzac-trt-kins, genserkins, ... and bipod);
+  ``loadrt NAME`` finds them there.
 - ``motion.free``: the per-joint trapezoidal free-mode planner and its jog rules.
 - ``motion.tp``: the coordinated-mode trajectory planner (replaceable, ARCH-008), and
   ``motion.tp.naivecam`` for G64 Q.

@@ -36,7 +36,7 @@ from motion.controller import (
     WheelInputs,
 )
 from motion.homing import load_homing
-from motion.kinematics import KinematicsError, load_kinematics
+from motion.kinematics import Kinematics, KinematicsError, fit_joints
 from motion.modules import ModuleInterfaceError
 from motion.pose import AXIS_LETTERS
 from motion.safety import DEFAULT_HEARTBEAT_TIMEOUT_S, MotionSafety
@@ -78,6 +78,12 @@ class MotionPins(RtComponent):
 
     def setup(self, num_dio: int = 4, num_aio: int = 4) -> None:
         pass
+
+
+class SwitchPins(RtComponent):
+    """Made when the kinematics are switchable, as in LinuxCNC (M428-M430 set it)."""
+
+    switchkins_type = pin("float in")
 
 
 class JointPins(RtComponent):
@@ -148,7 +154,7 @@ class Motmod:
 
     def __init__(self, host: Any, comp: str, args: dict[str, str]) -> None:
         options = _options(args)
-        kins = _kinematics(host)
+        kins = _kinematics(host, options["num_joints"])
         period_s = options["servo_period_nsec"] / 1e9
         planner, homing = _modules(args)
         try:
@@ -177,6 +183,9 @@ class Motmod:
         self.spindles = [
             SpindlePins.create(hal, comp, f"spindle.{i}") for i in range(options["num_spindles"])
         ]
+        is_switchable = getattr(kins, "is_switchable", False)
+        self.switch_pins = SwitchPins.create(hal, comp, "motion") if is_switchable else None
+        self.kinstype = 0
         try:
             config = load_config(os.environ.get("CNC_NML_FILE") or None)
             self.nml = Nml(config, NML_PROCESS, [MOTION_COMMAND, MOTION_STATUS, EMC_ERROR])
@@ -272,6 +281,8 @@ class Motmod:
         safety = self.safety
         if safety is not None:
             safety.period()
+        if self.switch_pins is not None:
+            self._switch_kinematics()
         inputs = self.inputs
         for index, pins in enumerate(self.joints):
             inputs.motor_pos_fb[index] = pins.motor_pos_fb
@@ -318,6 +329,24 @@ class Motmod:
             safety.messages.clear()
         controller.fill_status(self.status)
         self._publish()
+
+    def _switch_kinematics(self) -> None:
+        """As LinuxCNC: when ``motion.switchkins-type`` changes, switch the kinematics and
+        take the world position from the joints' commands through the new ones."""
+        wanted = int(self.switch_pins.switchkins_type)
+        if wanted == self.kinstype:
+            return
+        self.kinstype = wanted
+        controller = self.controller
+        joints = [joint.pos_cmd for joint in controller.joints]
+        try:
+            controller.kins.switch(wanted)
+            pose = controller.kins.forward(joints)
+        except KinematicsError as exc:
+            controller.fault(f"motion: kinematicsSwitch({wanted}) failed: {exc}")
+            return
+        controller.carte_pos_cmd = pose
+        controller.tp.set_position(list(pose))
 
     def _fail(self, where: str, exc: Exception) -> None:
         """A fault in one of motion's functions (a bug, a corrupt buffer): motion off, the
@@ -531,17 +560,10 @@ def _options(args: dict[str, str]) -> dict[str, int]:
     return options
 
 
-def _kinematics(host: Any):
-    """The kinematics loaded before motmod (``loadrt trivkins ...``), as LinuxCNC requires."""
+def _kinematics(host: Any, num_joints: int) -> Kinematics:
+    """The kinematics loaded before motmod (``loadrt trivkins ...``, which sets
+    ``host.kinematics``), as LinuxCNC requires, seen through motmod's joint count."""
     kins = getattr(host, "kinematics", None)
     if kins is None:
         raise HalError("motmod: no kinematics loaded; loadrt [KINS]KINEMATICS before motmod")
-    return kins
-
-
-def load_kinematics_module(host: Any, name: str, args: dict[str, str]) -> None:
-    """``loadrt trivkins coordinates=XYZ`` and friends: make the host's kinematics."""
-    try:
-        host.kinematics = load_kinematics(name, **args)
-    except (KinematicsError, ValueError, TypeError) as exc:
-        raise HalError(f"{name}: {exc}") from None
+    return fit_joints(kins, num_joints)

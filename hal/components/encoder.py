@@ -16,8 +16,6 @@ count comes, 0 after 1/``min-speed-estimate`` s), velocity-rpm and position-inte
 
 from __future__ import annotations
 
-from typing import Any
-
 from hal.api import RtComponent, module_funct, pin
 
 # quadrature phases (A, B) -> place on the cycle 00 -> A -> AB -> B
@@ -38,6 +36,9 @@ class _Events:
 
 
 class Encoder(RtComponent):
+    count_option = "num_chan"
+    default_count = 3
+    max_count = 8
     counter_mode = pin("bit io")
     counts = pin("s32 out")
     counts_latched = pin("s32 out")
@@ -59,13 +60,6 @@ class Encoder(RtComponent):
     velocity = pin("float out")
     velocity_rpm = pin("float out")
     x4_mode = pin("bit io", default=1)
-
-    @classmethod
-    def instances(cls, module: str, args: dict[str, str]) -> list[tuple[str, dict[str, Any]]]:
-        if "num_chan" in args:
-            args = dict(args)
-            args["count"] = args.pop("num_chan")
-        return super().instances(module, args)
 
     def setup(self) -> None:
         # update-counters side

@@ -13,8 +13,6 @@ implemented.
 
 from __future__ import annotations
 
-from typing import Any
-
 from hal.api import RtComponent, funct, pin
 
 
@@ -59,17 +57,12 @@ class Pid(RtComponent):
     tune_start = pin("bit io")
     tune_type = pin("u32 io")
 
-    @classmethod
-    def instances(cls, module: str, args: dict[str, str]) -> list[tuple[str, dict[str, Any]]]:
-        args = dict(args)
-        args.pop("debug", None)
-        if "num_chan" in args:
-            args["count"] = args.pop("num_chan")
-        elif "names" not in args and "count" not in args:
-            args["count"] = "3"
-        return super().instances(module, args)
+    count_option = "num_chan"
+    default_count = 3
+    max_count = 16
+    options = {"debug": int}  # (LinuxCNC's extra debugging pins are not made)
 
-    def setup(self) -> None:
+    def setup(self, debug: int = 0) -> None:
         self.error_i = 0.0
         self.prev_cmd = 0.0
         self.prev_fb = 0.0

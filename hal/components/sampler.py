@@ -3,7 +3,8 @@
 ``loadrt sampler depth=D[,D2...] cfg=STRING[,STRING2...]`` makes one channel per cfg
 string, with one input pin ``sampler.N.pin.M`` per letter (f float, b bit, s s32, u u32,
 l s64, k u64). Each call of ``sampler.N`` stores one row when ``enable`` is true; a full
-FIFO drops the row and counts an overrun.
+FIFO (``depth`` - 1 rows) drops the row and counts an overrun. ``sample-num`` is only
+declared, as in LinuxCNC 2.9: rows are numbered by the FIFO.
 """
 
 from __future__ import annotations
@@ -40,7 +41,7 @@ class Sampler(RtComponent):
             self.hal.new_pin(self.comp, f"{self.name}.pin.{m}", hal_type, HAL_IN)
             for m, hal_type in enumerate(self.types)
         ]
-        self.fifo = Fifo.create(self.name, depth, len(self.types))
+        self.fifo = Fifo.create(self.name, depth, self.types)
 
     def teardown(self) -> None:
         self.fifo.close()
@@ -48,18 +49,19 @@ class Sampler(RtComponent):
 
     @funct()
     def update(self, period: int) -> None:
+        fifo = self.fifo
         if not self.enable:
+            self.curr_depth = fifo.count()
+            self.full = not fifo.is_writable()
             return
         q, ptr = self.hal.q, self.hal.ptr
-        number = self.sample_num
-        row = [number, *(q[ptr[slot]] for slot in self.slots)]
-        self.sample_num = number + 1
-        is_stored = self.fifo.put(row)
-        if not is_stored:
+        if fifo.put([q[ptr[slot]] for slot in self.slots]):
+            self.full = False
+            self.curr_depth = fifo.count()
+        else:  # full: the row is lost
             self.overruns = self.overruns + 1
-        count = self.fifo.count()
-        self.curr_depth = count
-        self.full = count >= self.fifo.depth
+            self.full = True
+            self.curr_depth = fifo.depth
 
 
 COMPONENT = Sampler

@@ -8,7 +8,6 @@ middle of a cycle (sine and sawtooth 0, square, cosine and triangle at -amplitud
 """
 
 import math
-from typing import Any
 
 from hal.api import RtComponent, funct, pin
 
@@ -18,6 +17,8 @@ LINUXCNC_PI = 3.1415927
 
 
 class Siggen(RtComponent):
+    count_option = "num_chan"
+    max_count = 16
     square = pin("float out")
     sawtooth = pin("float out")
     triangle = pin("float out")
@@ -28,13 +29,6 @@ class Siggen(RtComponent):
     amplitude = pin("float in", default=1.0)
     offset = pin("float in")
     reset = pin("bit in")
-
-    @classmethod
-    def instances(cls, module: str, args: dict[str, str]) -> list[tuple[str, dict[str, Any]]]:
-        if "num_chan" in args:
-            args = dict(args)
-            args["count"] = args.pop("num_chan")
-        return super().instances(module, args)
 
     def setup(self) -> None:
         self.phase = 0.0  # fraction of the current cycle, 0 <= phase < 1

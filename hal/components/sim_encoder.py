@@ -10,8 +10,6 @@ revolution.
 
 from __future__ import annotations
 
-from typing import Any
-
 from hal.api import RtComponent, module_funct, pin
 
 # quadrature step -> (phase-A, phase-B)
@@ -25,6 +23,8 @@ def _wrap32(value: int) -> int:
 
 
 class SimEncoder(RtComponent):
+    count_option = "num_chan"
+    max_count = 8
     phase_A = pin("bit out")
     phase_B = pin("bit out")
     phase_Z = pin("bit out")
@@ -32,13 +32,6 @@ class SimEncoder(RtComponent):
     rawcounts = pin("s32 in")
     scale = pin("float io", default=1.0)
     speed = pin("float in")
-
-    @classmethod
-    def instances(cls, module: str, args: dict[str, str]) -> list[tuple[str, dict[str, Any]]]:
-        if "num_chan" in args:
-            args = dict(args)
-            args["count"] = args.pop("num_chan")
-        return super().instances(module, args)
 
     def setup(self) -> None:
         self.accum = 0

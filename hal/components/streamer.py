@@ -2,9 +2,9 @@
 
 ``loadrt streamer depth=D[,D2...] cfg=STRING[,...]`` makes one channel per cfg string with
 an output pin ``streamer.N.pin.M`` per letter (f, b, s, u, l, k). ``cnc hal stream`` fills
-the FIFO. Each call of ``streamer.N`` takes one row while ``enable`` is true (only at the
-``clock`` edges chosen by ``clock-mode`` when it is not 0); with nothing
-to take, ``empty`` is set and, when ``enable`` is true, ``underruns`` counts.
+the FIFO. Each call of ``streamer.N`` shows the rows waiting (``curr-depth``, ``empty``),
+then takes one row while ``enable`` is true (only at the ``clock`` edges chosen by
+``clock-mode`` when it is not 0); with nothing to take, ``underruns`` counts.
 """
 
 from __future__ import annotations
@@ -35,18 +35,22 @@ class Streamer(RtComponent):
             self.hal.new_pin(self.comp, f"{self.name}.pin.{m}", hal_type, HAL_OUT)
             for m, hal_type in enumerate(self.types)
         ]
-        self.fifo = Fifo.create(self.name, depth, len(self.types))
-        self.old_clock = False
+        self.fifo = Fifo.create(self.name, depth, self.types)
+        self.clock_edge = 0  # the last two clock states, newest in bit 0
 
     def _is_clocked(self) -> bool:
         """clock-mode 0: every period; 1: falling, 2: rising, 3: any edge of ``clock``."""
-        clock, mode = self.clock, self.clock_mode
-        was, self.old_clock = self.old_clock, clock
-        if mode == 0:
-            return True
-        if clock == was:
+        edge = self.clock_edge = ((self.clock_edge << 1) | self.clock) & 3
+        if not self.enable:
             return False
-        return mode == 3 or (mode == 2) == clock
+        mode = self.clock_mode
+        if mode == 1:
+            return edge == 2
+        if mode == 2:
+            return edge == 1
+        if mode == 3:
+            return edge in (1, 2)
+        return True
 
     def teardown(self) -> None:
         self.fifo.close()
@@ -54,19 +58,21 @@ class Streamer(RtComponent):
 
     @funct()
     def update(self, period: int) -> None:
-        if not self.enable or not self._is_clocked():
-            return
-        row = self.fifo.get()
-        if row is None:
-            self.empty = True
+        is_clocked = self._is_clocked()  # (the clock edges are followed every period)
+        fifo = self.fifo
+        depth = fifo.count()
+        self.curr_depth = depth
+        self.empty = depth == 0
+        if not is_clocked:
+            return  # the outputs keep their values
+        if depth == 0:
             self.underruns = self.underruns + 1
-            self.curr_depth = 0
             return
+        row = fifo.get()
+        assert row is not None  # (one reader: nothing took the row since count())
         q, ptr = self.hal.q, self.hal.ptr
-        for slot, word in zip(self.slots, row[1:].tolist(), strict=True):
+        for slot, word in zip(self.slots, row[1:], strict=True):
             q[ptr[slot]] = word
-        self.empty = False
-        self.curr_depth = self.fifo.count()
 
 
 COMPONENT = Streamer

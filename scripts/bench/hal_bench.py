@@ -171,7 +171,7 @@ def measure_ours(seconds: float, is_loaded: bool, host_options: dict[str, Any]) 
             hal.set_running(True)
             time.sleep(0.2)
             params = hal.meta["params"]
-            overrun_slot = params["servo-thread.overruns"]["slot"]
+            overrun_slot = hal.meta["threads"]["servo-thread"]["overruns_slot"]
             tmax_slot = params["servo-thread.tmax"]["slot"]
             competitors = other_rt_threads(thread.cpu)
             before = hal.q[overrun_slot]

@@ -18,7 +18,7 @@ Prints one JSON object:
 
 - ``lateness``: ``{p50_us, p99_us, p999_us, max_us, overruns, periods}`` of the servo thread
   while the dense program runs (start of the period after its deadline; overruns from the
-  host's ``servo-thread.overruns``), and ``loaded`` the same with one busy process on every
+  host's servo-thread overrun count), and ``loaded`` the same with one busy process on every
   CPU but the realtime one.
 - ``planner_us_per_period``: CPU time of motion-command-handler + motion-controller per
   period during the dense program (queueing moves, planning, joints, status), p50/p99/p999/max;
@@ -164,12 +164,12 @@ class CncSampler:
 
 
 def thread_overruns() -> int:
-    """The realtime host's ``servo-thread.overruns`` of the running machine."""
+    """The realtime host's servo-thread overrun count of the running machine."""
     from hal.core import Hal
 
     hal = Hal(is_creating=False)
     try:
-        return int(hal.q[hal.meta["params"]["servo-thread.overruns"]["slot"]])
+        return hal.thread_overruns("servo-thread")
     finally:
         hal.close()
 

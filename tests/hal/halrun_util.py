@@ -2,12 +2,19 @@
 
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[2]
 FILES = Path(__file__).resolve().parent / "files"
+
+
+def without_halcmd(names: list[str]) -> list[str]:
+    """Component names without ``halcmd<pid>``, the component every halcmd is while it
+    runs (as in LinuxCNC)."""
+    return [name for name in names if not re.fullmatch(r"halcmd\d+", name)]
 
 
 def run_cnc(

@@ -94,11 +94,11 @@ def test_errors_name_file_line_and_cause(tmp_path: Path) -> None:
         "frobnicate\n": "Unknown command 'frobnicate'",
         "loadrt and2\nsetp and2.0.out 1\n": "pin 'and2.0.out' is not writable",
         "loadrt and2\nsetp and2.0.in0 maybe\n": "value 'maybe' invalid for bit",
-        "loadrt or2 count=0\n": "or2: count must be at least 1",
+        "loadrt pid num_chan=17\n": "pid: ERROR: invalid num_chan: 17 (1 to 16)",
         "loadrt threads name1=t period1=1000000\nloadrt and2\naddf and2.0 t x\n": (
             "addf: position 'x' is not a whole number"
         ),
-        "loadrt threads name1=t period1=nope\n": "threads: period1 must be a number",
+        "loadrt threads name1=t period1=nope\n": "threads: period1 and fp1 must be whole numbers",
     }
     for text, cause in cases.items():
         result = halrun_text(tmp_path, text)
@@ -126,7 +126,7 @@ def test_save_prints_commands_that_rebuild_the_config(tmp_path: Path) -> None:
     result = halrun_text(tmp_path, AND2_FILE + "save\n")
     assert result.returncode == 0, result.stderr
     lines = result.stdout.splitlines()
-    assert "loadrt and2 count=2" in lines
+    assert "loadrt and2 count=2 " in lines  # LinuxCNC ends each argument with a space
     assert "net foo and2.0.out => and2.1.in0" in lines
     assert "newsig bar float" in lines
     assert "addf and2.0 servo-thread" in lines

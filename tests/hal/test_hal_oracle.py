@@ -27,6 +27,14 @@ def _rows(text: str) -> list[list[float]]:
         ("lcnc_oracle3.hal", "lcnc_oracle3_samples.txt", 1600),
         # stepgen step types 0-14 and a user step type, reversing under dirdelay
         ("lcnc_oracle_stepgen.hal", "lcnc_oracle_stepgen_samples.txt", 2400),
+        # small components of the sample configs and tests: abs_s32 ... lut5
+        ("lcnc_oracle_new1.hal", "lcnc_oracle_new1_samples.txt", 6000),
+        # orient, estop_latch, biquad, multiclick, encoder_ratio, mux_generic, counter,
+        # modmath, weighted_sum, pwmgen
+        ("lcnc_oracle_new2.hal", "lcnc_oracle_new2_samples.txt", 6000),
+        # corexy_by_hal, sim_matrix_kb, xhc_hb04_util, thc, sim_parport, sim_axis_hardware,
+        # anglejog, carousel (single and counts), eoffset_per_angle
+        ("lcnc_oracle_new3.hal", "lcnc_oracle_new3_samples.txt", 6000),
     ],
 )
 def test_components_match_linuxcnc_period_by_period(

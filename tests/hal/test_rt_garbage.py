@@ -17,7 +17,18 @@ from hal.core import HAL_BIT, HAL_FLOAT, HAL_IN, HAL_IO
 from tests.hal.comp_harness import bench
 
 # loadrt arguments a module needs
-ARGS = {"sampler": "cfg=ff", "streamer": "cfg=ff", "stepgen": "step_type=0,1 ctrl_type=p,v"}
+ARGS = {
+    "sampler": "cfg=ff",
+    "streamer": "cfg=ff",
+    "stepgen": "step_type=0,1 ctrl_type=p,v",
+    "mux_generic": "config=ff4,bs3,su2",
+    "weighted_sum": "wsum_sizes=3",
+    "pwmgen": "output_type=0,1,2",
+    "modmath": "mod_dir=1",
+    "logic": "personality=0x1f03",
+    "bitslice": "personality=8",
+    "carousel": "pockets=8,6 encoding=gray,counts",
+}
 # motmod needs a machine (tests/motion/test_rt_garbage.py covers the controller), hm2_eth a
 # card (tests/hw/test_hm2_driver.py); threads only makes threads
 ELSEWHERE = {"motmod", "threads", "hm2_eth"}

@@ -58,7 +58,7 @@ def test_trivkins_forward_inverse_round_trip(values: list[float], coordinates: s
 
 @given(coord, coord, coord)
 def test_corexy_round_trip(x: float, y: float, z: float) -> None:
-    kins = load_kinematics("corexy")
+    kins = load_kinematics("corexykins")
     joints = kins.inverse(EmcPose(x=x, y=y, z=z))
     assert joints[0] == pytest.approx(x + y) and joints[1] == pytest.approx(x - y)
     back = kins.forward(joints)
