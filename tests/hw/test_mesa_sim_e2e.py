@@ -29,6 +29,7 @@ import pytest
 import cnc
 from cnc.runtime import read_runtime_info
 from hal import api as hal_api
+from hal import pymodule
 from hal.core import Hal
 from tests.hal.halrun_util import REPO
 from tests.hw.conftest import free_loopback_ip
@@ -120,7 +121,7 @@ def machine(procs, tmp_path: Path, cnc_instance: str) -> Iterator[Machine]:
 
 
 def get(name: str):
-    return hal_api.get_value(name)
+    return pymodule.get_value(name)
 
 
 @pytest.mark.timeout(400)
