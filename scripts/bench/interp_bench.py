@@ -38,7 +38,15 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(REPO))
 
-REFERENCE_PROGRAMS = REPO.parent / "shared" / "reference" / "programs"
+# ../shared/reference/programs of the checkout (a helper's worktree is one folder deeper)
+REFERENCE_PROGRAMS = next(
+    (
+        folder / "shared" / "reference" / "programs"
+        for folder in (REPO.parent, REPO.parent.parent)
+        if (folder / "shared" / "reference" / "programs").is_dir()
+    ),
+    REPO.parent / "shared" / "reference" / "programs",
+)
 REFERENCE = REFERENCE_PROGRAMS / "bigprog_50k.ngc"
 OWORD_SUBS = REFERENCE_PROGRAMS / "oword_subs.ngc"
 RS274 = "/usr/bin/rs274"
