@@ -283,6 +283,12 @@ class Interpreter(
         self._compiled = _Uncached()
         self._plans = _Uncached()
 
+    def _unwind_after_error(self) -> None:
+        """An error returns from every call; inside Python's self.execute(), only from the
+        calls it made (python_execute does that), not from the remap that runs it."""
+        if not self.nested_executes:
+            self.unwind_call()
+
     def _note_stack(self, error: InterpError) -> None:
         if self.has_error_stack and not error.stack:
             error.stack = error_stack(error.__traceback__, error.message)
@@ -794,7 +800,7 @@ class Interpreter(
             return self._read(command)
         except InterpError as error:
             self._note_stack(error)
-            self.unwind_call()
+            self._unwind_after_error()
             raise
 
     def _read(self, command: str | None, has_plan: bool = False) -> int:
@@ -1040,13 +1046,13 @@ class Interpreter(
                     return planned[0](planned[1])
                 except InterpError as error:
                     self._note_stack(error)
-                    self.unwind_call()
+                    self._unwind_after_error()
                     raise
         try:
             return self._execute(command)
         except InterpError as error:
             self._note_stack(error)
-            self.unwind_call()
+            self._unwind_after_error()
             raise
 
     def _execute(self, command: str | None) -> int:
