@@ -317,6 +317,7 @@ def _run(
         interp.init()
     except InterpError as error:
         _report(out, interp, error)
+        interp.release_python()
         return 1
     if not args:
         status = interpret_from_keyboard(interp, out, block_delete)
@@ -325,6 +326,7 @@ def _run(
             interp.open(args[0])
         except InterpError as error:
             _report(out, interp, error)
+            interp.release_python()
             return 1
         status = interpret_from_file(interp, out, do_next, block_delete)
         interp.close()

@@ -1411,54 +1411,17 @@ class Interpreter(
             if STEP_PREPARE in remapped:
                 return self.convert_remapped_code(block, STEP_PREPARE, remaps.letter["T"])
             self.convert_tool_select(block)
-        for group, convert in (
-            (5, self.convert_m_group5),
-            (6, self.convert_m_group6),
-            (7, self.convert_m_group7),
-            (8, self.convert_m_group8),
-            (9, self.convert_m_group9),
-            (10, self.convert_m_group10),
-        ):
+        for group, step, convert in _M_STEPS:
             code = m_modes[group]
-            step = STEP_M_GROUP[group]
             if code != -1 and _once(done, step):
                 if step in remapped:
                     return self.convert_remapped_code(block, step, remaps.m[code])
-                convert(block, code)
+                convert(self, block, code)
         if g_modes[GM_MODAL_0] == G_4 and _once(done, STEP_DWELL):
             self._enq("DWELL", block.p_number)
-        for group, step, convert in (  # convert_g's steps, in its order
-            (GM_SET_PLANE, STEP_SET_PLANE, self.convert_set_plane),
-            (GM_LENGTH_UNITS, STEP_LENGTH_UNITS, self.convert_length_units),
-            (
-                GM_LATHE_DIAMETER_MODE,
-                STEP_LATHE_DIAMETER_MODE,
-                lambda code: self.convert_lathe_diameter_mode(code, block),
-            ),
-            (
-                GM_CUTTER_COMP,
-                STEP_CUTTER_COMP,
-                lambda code: self.convert_cutter_compensation(code, block),
-            ),
-            (
-                GM_TOOL_LENGTH_OFFSET,
-                STEP_TOOL_LENGTH_OFFSET,
-                lambda code: self.convert_tool_length_offset(code, block),
-            ),
-            (GM_COORD_SYSTEM, STEP_COORD_SYSTEM, self.convert_coordinate_system),
-            (
-                GM_CONTROL_MODE,
-                STEP_CONTROL_MODE,
-                lambda code: self.convert_control_mode(code, block.p_number, block.q_number),
-            ),
-            (GM_DISTANCE_MODE, STEP_DISTANCE_MODE, self.convert_distance_mode),
-            (GM_IJK_DISTANCE_MODE, STEP_IJK_DISTANCE_MODE, self.convert_ijk_distance_mode),
-            (GM_RETRACT_MODE, STEP_RETRACT_MODE, self.convert_retract_mode),
-            (GM_MODAL_0, STEP_MODAL_0, lambda code: self.convert_modal_0(code, block)),
-            (GM_G92_IS_APPLIED, STEP_G92_IS_APPLIED, lambda code: self._g92_applied(code, block)),
-        ):
+        for group, step, convert in _G_STEPS:
             if g_modes[group] != -1 and _once(done, step):
-                convert(g_modes[group])
+                convert(self, g_modes[group], block)
         motion = block.motion_to_be
         if motion != -1 and _once(done, STEP_MOTION):
             if STEP_MOTION in remapped:
@@ -2059,6 +2022,47 @@ class _NoPlan(LinePlan):
 _SEEN_ONCE = _NoPlan("", "")  # read once so far
 _NO_PLAN = _NoPlan("", "")  # cannot be planned
 _FAST_FIRST = frozenset("nNgGxXyYzZaAbBcC")
+
+
+# execute_block_steps: convert_m's groups and convert_g's steps, in their order
+_M_STEPS = (
+    (5, STEP_M_GROUP[5], MCodesMixin.convert_m_group5),
+    (6, STEP_M_GROUP[6], MCodesMixin.convert_m_group6),
+    (7, STEP_M_GROUP[7], MCodesMixin.convert_m_group7),
+    (8, STEP_M_GROUP[8], MCodesMixin.convert_m_group8),
+    (9, STEP_M_GROUP[9], MCodesMixin.convert_m_group9),
+    (10, STEP_M_GROUP[10], MCodesMixin.convert_m_group10),
+)
+_G_STEPS = (
+    (GM_SET_PLANE, STEP_SET_PLANE, lambda i, code, b: i.convert_set_plane(code)),
+    (GM_LENGTH_UNITS, STEP_LENGTH_UNITS, lambda i, code, b: i.convert_length_units(code)),
+    (
+        GM_LATHE_DIAMETER_MODE,
+        STEP_LATHE_DIAMETER_MODE,
+        lambda i, code, b: i.convert_lathe_diameter_mode(code, b),
+    ),
+    (GM_CUTTER_COMP, STEP_CUTTER_COMP, lambda i, code, b: i.convert_cutter_compensation(code, b)),
+    (
+        GM_TOOL_LENGTH_OFFSET,
+        STEP_TOOL_LENGTH_OFFSET,
+        lambda i, code, b: i.convert_tool_length_offset(code, b),
+    ),
+    (GM_COORD_SYSTEM, STEP_COORD_SYSTEM, lambda i, code, b: i.convert_coordinate_system(code)),
+    (
+        GM_CONTROL_MODE,
+        STEP_CONTROL_MODE,
+        lambda i, code, b: i.convert_control_mode(code, b.p_number, b.q_number),
+    ),
+    (GM_DISTANCE_MODE, STEP_DISTANCE_MODE, lambda i, code, b: i.convert_distance_mode(code)),
+    (
+        GM_IJK_DISTANCE_MODE,
+        STEP_IJK_DISTANCE_MODE,
+        lambda i, code, b: i.convert_ijk_distance_mode(code),
+    ),
+    (GM_RETRACT_MODE, STEP_RETRACT_MODE, lambda i, code, b: i.convert_retract_mode(code)),
+    (GM_MODAL_0, STEP_MODAL_0, lambda i, code, b: i.convert_modal_0(code, b)),
+    (GM_G92_IS_APPLIED, STEP_G92_IS_APPLIED, lambda i, code, b: i._g92_applied(code, b)),
+)
 
 
 def _once(done: set[int], step: int) -> bool:

@@ -363,41 +363,43 @@ class RemapMixin:
         remaps = self.remaps
         steps = set()
         cblock = self.remap_blocks[self.remap_level] if self.remap_level else block
-        for flag, letter, step in (
-            (block.f_flag, "F", STEP_SET_FEED_RATE),
-            (block.s_flag, "S", STEP_SET_SPINDLE_SPEED),
-            (block.t_flag, "T", STEP_PREPARE),
-        ):
-            remap = remaps.letter.get(letter) if flag else None
-            if remap is not None:
-                if self.remap_in_progress(remap):
-                    cblock.builtin_used = True  # the built-in inside its own procedure
-                else:
-                    steps.add(step)
+        if remaps.letter:
+            for flag, letter, step in (
+                (block.f_flag, "F", STEP_SET_FEED_RATE),
+                (block.s_flag, "S", STEP_SET_SPINDLE_SPEED),
+                (block.t_flag, "T", STEP_PREPARE),
+            ):
+                remap = remaps.letter.get(letter) if flag else None
+                if remap is not None:
+                    if self.remap_in_progress(remap):
+                        cblock.builtin_used = True  # the built-in inside its own procedure
+                    else:
+                        steps.add(step)
         m_modes = block.m_modes
-        for group in (5, 6, 7, 8, 9, 10):
-            code = m_modes[group]
+        if block.m_count:
+            for group in (5, 6, 7, 8, 9, 10):
+                code = m_modes[group]
+                remap = remaps.m.get(code) if code != -1 else None
+                if remap is None:
+                    continue
+                if self.remap_in_progress(remap):
+                    if code in _BUILTIN_IN_OWN_PROCEDURE.get(group, ()):
+                        continue  # the built-in
+                    self._recursion(remap)
+                steps.add(STEP_M_GROUP[group])
+            code = m_modes[4]
             remap = remaps.m.get(code) if code != -1 else None
-            if remap is None:
-                continue
-            if self.remap_in_progress(remap):
-                if code in _BUILTIN_IN_OWN_PROCEDURE.get(group, ()):
-                    continue  # the built-in
-                self._recursion(remap)
-            steps.add(STEP_M_GROUP[group])
+            if remap is not None:
+                if any(self.remap_in_progress(remaps.get(name)) for name in _STOP_CODES):
+                    cblock.builtin_used = True
+                else:
+                    steps.add(STEP_MGROUP4)
         for motion in (block.g_modes[1], block.motion_to_be):
-            remap = remaps.g.get(motion) if motion != -1 else None
+            remap = remaps.g.get(motion)
             if remap is not None:
                 if self.remap_in_progress(remap):
                     self._recursion(remap)
                 steps.add(STEP_MOTION)
-        code = m_modes[4]
-        remap = remaps.m.get(code) if code != -1 else None
-        if remap is not None:
-            if any(self.remap_in_progress(remaps.get(name)) for name in _STOP_CODES):
-                cblock.builtin_used = True
-            else:
-                steps.add(STEP_MGROUP4)
         if steps:
             block.remappings = steps
 
@@ -464,10 +466,8 @@ class RemapMixin:
         block.executing_remap = remap
         block.phase = step
         block.param_cnt = 0
-        self.trace(
-            EMC_DEBUG_REMAP,
-            f"remap: {remap.name} (level {self.remap_level}) calls {remap.function}",
-        )
+        if self.traces & EMC_DEBUG_REMAP:
+            self.trace(f"remap: {remap.name} (level {self.remap_level}) calls {remap.function}")
         command = f"O <{remap.function}> call "
         if remap.argspec and "@" in remap.argspec:
             command += self.add_parameters(block, remap, None, is_positional=True)
@@ -535,7 +535,8 @@ class RemapMixin:
         remaining steps and pop the remap stack."""
         cblock = self.remap_blocks[self.remap_level]
         cblock.remappings.discard(step)
-        self.trace(EMC_DEBUG_REMAP, f"remap: {cblock.executing_remap.name} finished")
+        if self.traces & EMC_DEBUG_REMAP:
+            self.trace(f"remap: {cblock.executing_remap.name} finished")
         status = self.execute_block_steps(cblock)
         if status < 0:
             return self.execute()  # the block's next remap
@@ -608,7 +609,8 @@ class RemapMixin:
         if function is None:
             raise InterpError(f"O<{name}>: the Python O-word procedure is gone")
         args = (block.params or ())[: block.param_cnt]
-        self.trace(EMC_DEBUG_PYTHON, f"python: oword.{name}{tuple(args)}")
+        if self.traces & EMC_DEBUG_PYTHON:
+            self.trace(f"python: oword.{name}{tuple(args)}")
         result = self._call_python(f"O<{name}>", function, self.python_view, *args)
         if _is_generator(result):
             result.close()
@@ -643,14 +645,16 @@ class RemapMixin:
         if self.call_state == resume_state:
             self.read_inputs()
             generator = frame.py_generator
-            self.trace(EMC_DEBUG_PYTHON, f"python: {label} resumes")
+            if self.traces & EMC_DEBUG_PYTHON:
+                self.trace(f"python: {label} resumes")
             result = self._resume(label, generator)
         else:
             function = self.python.find("remap", name)
             if function is None:
                 raise InterpError(f"{label}: the remap function is gone")
             self.saved_error = ""
-            self.trace(EMC_DEBUG_PYTHON, f"python: {label}{tuple(frame.py_kwargs.items())}")
+            if self.traces & EMC_DEBUG_PYTHON:
+                self.trace(f"python: {label}{tuple(frame.py_kwargs.items())}")
             result = self._call_python(label, function, self.python_view, **frame.py_kwargs)
             if _is_generator(result):
                 frame.py_generator = result
@@ -816,7 +820,8 @@ class RemapMixin:
         function = self.python.find("namedparams", name) if self.python else None
         if function is None:
             raise InterpError(f"#<{name}>: its namedparams function is gone")
-        self.trace(EMC_DEBUG_NAMEDPARAM, f"namedparams: {name}")
+        if self.traces & EMC_DEBUG_NAMEDPARAM:
+            self.trace(f"namedparams: {name}")
         result = self._call_python(f"#<{name}>", function, self.python_view)
         if isinstance(result, str):
             raise InterpError(result)
@@ -869,6 +874,13 @@ class RemapMixin:
         if function is not None:
             self._call_python("__init__", function, self.python_view)
 
+    def release_python(self) -> None:
+        """Close the plug-in without ``__delete__`` (a preview, a failed start)."""
+        if self.python is not None:
+            self.python.close()
+            self.python = None
+            self.is_python_started = False
+
     def stop_python(self) -> None:
         """At exit: TOPLEVEL's ``__delete__`` (after the parameters were saved), then the
         plug-in closes."""
@@ -890,7 +902,8 @@ class RemapMixin:
     def run_python(self, statement: str) -> None:
         """``;py,<statement>`` and ``(py,<statement>)`` (PY-027)."""
         python = self.require_python()
-        self.trace(EMC_DEBUG_PYTHON, f"python: {statement}")
+        if self.traces & EMC_DEBUG_PYTHON:
+            self.trace(f"python: {statement}")
         try:
             python.run(statement)
         except Exception as error:
@@ -898,10 +911,14 @@ class RemapMixin:
             raise InterpError(f"py_execute({statement}): {cause}") from None
 
     # --------------------------------------------------------------- traces
-    def trace(self, flag: int, text: str) -> None:
-        """A debug trace of [EMC]DEBUG's ``flag`` (REMAP-056), at LOG_LEVEL >= 2."""
-        if self.debugmask & flag and self.log_level > 1:
-            self.report(text + "\n")
+    @property
+    def traces(self) -> int:
+        """The [EMC]DEBUG flags (REMAP-056) whose traces print: all of them at
+        [RS274NGC]LOG_LEVEL >= 2, none below."""
+        return self.debugmask if self.log_level > 1 else 0
+
+    def trace(self, text: str) -> None:
+        self.report(text + "\n")
 
 
 class _Yielded:

@@ -40,6 +40,7 @@ def interpreter(folder: Path, ini: str, files: dict[str, str] | None = None):
     interp = Interpreter(canon, ini=IniFile.load(path), parameter_file=str(folder / "t.var"))
     reports: list[str] = []
     interp.report = reports.append
+    _INTERPRETERS.append(interp)
     return interp, lines, reports
 
 
@@ -57,13 +58,16 @@ def run(interp: Interpreter, program: str, folder: Path) -> list[str]:
     return statuses
 
 
+_INTERPRETERS: list[Interpreter] = []
+
+
 @pytest.fixture
 def in_folder(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     yield tmp_path
-    # a failed test must not leave its Python modules behind for the next one
-    for name in ("remap", "oword", "namedparams", "toplevel", "stdglue"):
-        sys.modules.pop(name, None)
+    # the test's Python modules and folders go, whatever happened to the test
+    while _INTERPRETERS:
+        _INTERPRETERS.pop().release_python()
 
 
 M400 = "o<m400> sub\n(debug, p=#<p>)\no<m400> endsub\nM2\n"

@@ -283,8 +283,7 @@ def parse(filename: str, canon, unitcode="", initcode="", interpname: str = "") 
     finally:
         interp.use_lazy_close = False
         interp.close()
-        if interp.python is not None:
-            interp.python.close()  # (no __delete__ in a preview)
+        interp.release_python()  # (no __delete__ in a preview)
     adapter.new_line()
     return status, adapter.last_line + error_offset
 

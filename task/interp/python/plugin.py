@@ -33,6 +33,11 @@ GLUE_FOLDER = str(Path(__file__).with_name("glue"))
 MODULES = {"interpreter": interpreter, "emccanon": emccanon}
 # configuring a plug-in changes sys.path and sys.modules: one at a time in a process
 _CONFIGURE_LOCK = threading.Lock()
+# the modules TOPLEVEL files imported and the module path entries added, of every plug-in of
+# the process: a new plug-in starts without those of plug-ins not closed (another
+# configuration's remap.py, stdglue.py or folders must not stand for its own)
+_USER_MODULES: set[str] = set()
+_USER_PATHS: list[str] = []
 
 
 class PluginError(Exception):
@@ -86,12 +91,15 @@ class PythonPlugin:
         with _CONFIGURE_LOCK:
             for name, module in self.modules.items():
                 sys.modules[name] = module
+            _remove_paths(_USER_PATHS)
+            _USER_PATHS.clear()
             for folder in prepend:
                 sys.path.insert(0, folder)
                 self._added_paths.append(folder)
             for folder in (*append, GLUE_FOLDER):
                 sys.path.append(folder)
                 self._added_paths.append(folder)
+            _USER_PATHS.extend(self._added_paths)
             _forget_finders(self._added_paths)
             self._initialize()
 
@@ -139,6 +147,9 @@ class PythonPlugin:
         self.namespace = namespace
         if self.toplevel is None:
             return
+        for name in _USER_MODULES:
+            sys.modules.pop(name, None)
+        _USER_MODULES.clear()
         before = set(sys.modules)
         self._toplevel_mtime = _mtime(self.toplevel)
         try:
@@ -153,6 +164,7 @@ class PythonPlugin:
         finally:
             for name in set(sys.modules) - before:
                 self._own_modules[name] = _mtime(getattr(sys.modules[name], "__file__", None))
+                _USER_MODULES.add(name)
         self.log_at(1, f"PythonPlugin: {self.toplevel} loaded")
 
     def _forget_own_modules(self) -> None:
@@ -179,9 +191,7 @@ class PythonPlugin:
         """Forget the modules TOPLEVEL imported and the module path entries added."""
         with _CONFIGURE_LOCK:
             self._forget_own_modules()
-            for folder in self._added_paths:
-                if folder in sys.path:
-                    sys.path.remove(folder)
+            _remove_paths(self._added_paths)
             _forget_finders(self._added_paths)
             self._added_paths.clear()
         if interpreter.this is self.view:
@@ -231,6 +241,14 @@ class PythonPlugin:
             error = UserCodeError(exc)
             self.log_at(0, f"run_string({statement}): \n{error.text}")
             raise error from None
+
+
+def _remove_paths(folders: list[str]) -> None:
+    """Take the entries out of the module path (one each: the same folder may be there
+    for other reasons too)."""
+    for folder in folders:
+        if folder in sys.path:
+            sys.path.remove(folder)
 
 
 def _forget_finders(folders: list[str]) -> None:
