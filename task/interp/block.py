@@ -243,6 +243,7 @@ class Block:
     builtin_used = False
     phase = 0
     saved_line_number = 0
+    is_mdi_remap = False  # found in an MDI line (its saved_line_number is no program line)
 
     def __init__(self) -> None:
         self.g_modes = [-1] * 17

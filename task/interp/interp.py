@@ -765,13 +765,25 @@ class Interpreter(
     def on_abort(self, reason: int, message: str = "") -> int:
         """After an abort: reset, and run [RS274NGC]ON_ABORT_COMMAND with the reason as its
         argument (REMAP-037); returns -1 when there is none, else its status."""
+        command = self.abort_command(reason)
+        if command is None:
+            return -1
+        return self.execute(command)
+
+    def abort_command(self, reason: int) -> str | None:
+        """What on_abort does before it runs ON_ABORT_COMMAND, for a caller that runs the
+        command itself (task, as an MDI command): reset, forget the flags an interrupted
+        remap may have left set; the command, an O-word call with the reason (LinuxCNC's
+        EMC_ABORT_*) as its argument, or None when there is none."""
         self.reset()
         self.mdi_interrupt = False
-        # an interrupted remap may have left these set
         self.toolchange_flag = self.probe_flag = self.input_flag = False
-        if not self.on_abort_command:
-            return -1
-        return self.execute(f"{self.on_abort_command} [{reason}]")
+        command = self.on_abort_command
+        if not command:
+            return None
+        if command.lower().replace(" ", "").endswith("call"):  # O<on_abort> call [reason]
+            return f"{command} [{reason}]"
+        return command  # any other MDI line (e.g. M9) as it is
 
     # ================================================================= read
     def read(self, command: str | None = None) -> int:
@@ -1080,23 +1092,9 @@ class Interpreter(
                 if self.mdi_interrupt:
                     self.mdi_interrupt = False
                     mdi_mode = True
-            while mdi_mode and self.call_level:
-                deadline = self.slice_deadline
-                if deadline is not None and time.monotonic() >= deadline:
-                    self.is_mdi_call_sliced = True
-                    return INTERP_OK
-                status = self.read()
-                if status > INTERP_MIN_ERROR:  # e.g. seeking a subroutine no file defines
-                    raise InterpError("File not open")
-                status = self.execute()
-                if status != INTERP_OK:
-                    if status == INTERP_EXECUTE_FINISH:
-                        self.mdi_interrupt = True
-                    return status
-            self.mdi_interrupt = False
             if mdi_mode:
-                self.canon.FINISH()
-                self.offset_map.clear()
+                return self.run_mdi_call(is_finishing=True)
+            self.mdi_interrupt = False
             return INTERP_OK
         if self.skipping_o:
             return INTERP_OK
@@ -1105,6 +1103,28 @@ class Interpreter(
             if block.remappings:
                 return self.execute_remapped_block(block, mdi_mode)
             return self.execute_block(block)
+        return INTERP_OK
+
+    def run_mdi_call(self, is_finishing: bool) -> int:
+        """An MDI line's subroutine call (or remap) runs to its end, in slices up to
+        ``slice_deadline``; ``is_finishing``: then FINISH() (an MDI line's own call)."""
+        while self.call_level:
+            deadline = self.slice_deadline
+            if deadline is not None and time.monotonic() >= deadline:
+                self.is_mdi_call_sliced = True
+                return INTERP_OK
+            status = self.read()
+            if status > INTERP_MIN_ERROR:  # e.g. seeking a subroutine no file defines
+                raise InterpError("File not open")
+            status = self.execute()
+            if status != INTERP_OK:
+                if status == INTERP_EXECUTE_FINISH:
+                    self.mdi_interrupt = True
+                return status
+        self.mdi_interrupt = False
+        if is_finishing:
+            self.canon.FINISH()
+            self.offset_map.clear()
         return INTERP_OK
 
     # ======================================================= block checking
@@ -1974,6 +1994,12 @@ class Interpreter(
             self.call_level -= 1
         if level:
             return
+        if self.remap_level and not self.sequence_number:
+            # the line of the remapped code, in a program (LinuxCNC leaves the 0 of
+            # enter_remap; for an MDI line there is no line to tell)
+            outermost = self.remap_blocks[1]
+            if not outermost.is_mdi_remap:
+                self.sequence_number = outermost.saved_line_number
         self.sub_name = None
         self.remap_level = 0
         self.call_state = CS_NORMAL

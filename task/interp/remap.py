@@ -422,6 +422,7 @@ class RemapMixin:
     def execute_remapped_block(self, block: Block, is_mdi: bool) -> int:
         """Execute a block with remapped steps: up to the first remap, then its call."""
         self.enter_remap(block)
+        block.is_mdi_remap = is_mdi
         status = self.execute_block_steps(block)
         if status >= 0:
             return status  # (no remapped step ran: in inverse time a remapped F does not)
@@ -431,15 +432,7 @@ class RemapMixin:
             if status != INTERP_OK:
                 return status
             self.mdi_interrupt = False
-            while self.call_level:
-                self.read()
-                status = self.execute()
-                if status == INTERP_EXECUTE_FINISH:
-                    self.mdi_interrupt = True
-                if status != INTERP_OK:
-                    return status
-            self.mdi_interrupt = False
-            return INTERP_OK
+            return self.run_mdi_call(is_finishing=False)
         return self.execute()  # the call read by convert_remapped_code
 
     def enter_remap(self, block: Block) -> None:
@@ -732,6 +725,7 @@ class RemapMixin:
 
         saved_block, saved_state = self.block, self.call_state
         level, remap_level = self.call_level, self.remap_level
+        saved_deadline, self.slice_deadline = self.slice_deadline, None  # (runs whole)
         self.call_state = CS_NORMAL
         self.nested_executes += 1
         message = None
@@ -758,6 +752,7 @@ class RemapMixin:
             self.nested_executes -= 1
             self.call_state = saved_state
             self.block = saved_block
+            self.slice_deadline = saved_deadline
         if message is not None:
             if interpreter.throw_exceptions:
                 line = line_number if line_number else saved_block.line_number
