@@ -257,7 +257,10 @@ def parse(filename: str, canon, unitcode="", initcode="", interpname: str = "") 
             _last_error = str(error)
             return INTERP_ERROR, 0
     parameter_file = getattr(canon, "parameter_file", "") or ""
-    interp = Interpreter(adapter, ini=ini, parameter_file=parameter_file, task=0)
+    if not isinstance(parameter_file, str | os.PathLike):
+        _last_error = f"canon.parameter_file is no file name: {parameter_file!r}"
+        return INTERP_ERROR, 0
+    interp = Interpreter(adapter, ini=ini, parameter_file=str(parameter_file), task=0)
     status = INTERP_OK
     error_offset = 0
     try:
