@@ -12,12 +12,14 @@ from io import BytesIO
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
+REPO = HERE.parents[2]
 EXPECTED = HERE / "expected"
 # LinuxCNC's source: a bare git mirror; its tests are taken from the 2.9 branch
 MIRROR = Path(os.environ.get("LINUXCNC_MIRROR", "/work/.mirror/LinuxCNC+linuxcnc/repo"))
 MIRROR_REF = "2.9"
 # Debian's linuxcnc-uspace installs the sample configurations here
 EXAMPLES = Path("/usr/share/doc/linuxcnc/examples")
+OUR_STDGLUE = REPO / "task" / "interp" / "python" / "glue"
 # a sample's TOPLEVEL prints its process id: the same in every recording
 _PID = re.compile(r"(interp __(?:init|delete)__ \d+) \d+")
 
@@ -49,6 +51,9 @@ class Case:
             with tarfile.open(fileobj=BytesIO(archive.stdout)) as tar:
                 tar.extractall(scratch, filter="data")
             return scratch / self.folder
+        if self.folder.startswith("configs/"):  # our own examples (their stdglue: see env)
+            shutil.copytree(REPO / self.folder, scratch / self.folder)
+            return scratch / self.folder
         source = EXAMPLES / "sample-configs" / self.folder
         remap_lib = EXAMPLES / "nc_files" / "remap_lib"
         if not source.is_dir() or not remap_lib.is_dir():
@@ -58,6 +63,14 @@ class Case:
         # the configurations name ../../nc_files: sim/axis/nc_files is a link, as installed
         (scratch / "sim" / "axis" / "nc_files").symlink_to("../../nc_files")
         return scratch / self.folder
+
+    def linuxcnc_env(self) -> dict[str, str]:
+        """More environment for LinuxCNC's rs274: our examples import stdglue, which ours
+        has built in; LinuxCNC gets the same one (ours runs there unchanged), so that the
+        recording tests the examples, our interpreter and our stdglue together."""
+        if self.folder.startswith("configs/"):
+            return {"PYTHONPATH": str(OUR_STDGLUE)}
+        return {}
 
     def normalize(self, text: str, folder: Path) -> str:
         """Outputs without what differs from run to run: the scratch folder, process ids."""

@@ -40,7 +40,7 @@ def main(names: list[str]) -> int:
                 cwd=folder,
                 capture_output=True,
                 stdin=subprocess.DEVNULL,
-                env={**os.environ, "PYTHONUNBUFFERED": "1"},
+                env={**os.environ, "PYTHONUNBUFFERED": "1", **case.linuxcnc_env()},
                 timeout=120,
                 check=False,
             )
