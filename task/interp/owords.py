@@ -170,9 +170,15 @@ class OWordMixin:
         block = self.block
         if self.skipping_o:
             self.skipping_o = None
+        # (enter_call_parameters and save_return_point, inline: a call per O-word call less)
         if call_type != CT_NGC_M98_SUB and not has_parameters:
-            self.enter_call_parameters(previous, block.params)
-        self.save_return_point(previous)
+            pars = self.parameters
+            previous.saved_params = pars[1:31]
+            if block.params is not None:
+                pars[1:31] = block.params
+        previous.position = -1 if self.file_lines is None else self.file_pos
+        previous.filename = self.filename
+        previous.sequence_number = self.sequence_number
         if self.feature_oword_n_args:
             self.add_named_param("n_args", 1)
             self.store_named_param("n_args", float(block.param_cnt), True)
