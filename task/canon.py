@@ -331,6 +331,10 @@ class TaskCanon:
         """emccanon's CANON_ERROR: a message for the operator's error channel."""
         self._queue(emc.EMC_OPERATOR_ERROR(id=0, error=emc.fit_text(text)))
 
+    def CANON_ERROR(self, text: str) -> None:
+        """emccanon.CANON_ERROR of Python code: an error message for every UI."""
+        self._error(text)
+
     # ================================================================ limits
     def _straight(self, end: Sequence[float]) -> _Straight:
         """Velocity and acceleration limits of a straight move from the end point to ``end``."""

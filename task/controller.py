@@ -79,6 +79,10 @@ BUSY_POLL_S = 0.001  # how often task looks at motion while a program or MDI run
 PLAN_SLICE_S = 0.005
 DEFAULT_HEARTBEAT_TIMEOUT_S = 1.0  # [TASK]HEARTBEAT_TIMEOUT
 DEFAULT_INTERP_TIMEOUT_S = 10.0  # [TASK]INTERP_TIMEOUT (0: never)
+# why ON_ABORT_COMMAND runs (its argument): LinuxCNC's EMC_ABORT reasons
+EMC_ABORT_TASK_ABORT = 8
+EMC_ABORT_INTERPRETER_ERROR = 9  # during a program
+EMC_ABORT_INTERPRETER_ERROR_MDI = 10
 
 
 class Run(enum.Enum):
@@ -146,7 +150,11 @@ class Task:
         # what the canon queues, with line numbers (it may hold INIT_CANON's settings already)
         self.queue = self.canon.out = LineQueue(self.canon.out)
         self.interp = Interpreter(
-            self.canon, ini=ini, parameter_file=self.setup.parameter_file, task=1
+            self.canon,
+            ini=ini,
+            parameter_file=self.setup.parameter_file,
+            task=1,
+            python_modules=self._python_modules(),
         )
         self.interp.init()
         self.interp.on_progress = self.keep_alive  # (reading a large program)
@@ -160,6 +168,7 @@ class Task:
         self.is_optional_stop = False
         self.is_block_delete = False
         self.delay_until = 0.0
+        self.input_wait: tuple[int, float] | None = None  # an M66 under way: (mode, deadline)
         self.mdi_queue: deque[tuple[int, str]] = deque()
         self.pending_serial = 0  # a command still running (MDI), answered DONE when finished
         self.last_motion_serial = 0
@@ -178,6 +187,7 @@ class Task:
         self.is_stepping = False  # AUTO_STEP: one line at a time
         self.step_line: int | None = None  # the line this step carries out (None: the next)
         self.interp_timeout = ini.get_float("TASK", "INTERP_TIMEOUT", DEFAULT_INTERP_TIMEOUT_S)
+        self.is_running_on_abort = False  # ON_ABORT_COMMAND runs (its errors: no other)
         self.idle_reading_s = 0.0  # the interpreter's time since it last queued anything
         self.safety = SafetyLink.open(
             "task", ini.get_float("TASK", "HEARTBEAT_TIMEOUT", DEFAULT_HEARTBEAT_TIMEOUT_S)
@@ -477,7 +487,15 @@ class Task:
         problem = self._ensure_coordinated()
         if problem:
             return problem
-        return self._start_mdi(cmd.command)
+        return self._start_mdi_or_abort(cmd.command)
+
+    def _start_mdi_or_abort(self, text: str) -> str | bool:
+        """``_start_mdi``; when the interpreter refuses the line, ON_ABORT_COMMAND runs
+        (reason 10, EMC_ABORT_INTERPRETER_ERROR_MDI) after the error is reported."""
+        outcome = self._start_mdi(text)
+        if isinstance(outcome, str):
+            self._run_on_abort(EMC_ABORT_INTERPRETER_ERROR_MDI)
+        return outcome
 
     def _start_mdi(self, text: str) -> str | bool:
         self.stat.task.command = emc.fit_text(text)
@@ -628,12 +646,7 @@ class Task:
             self.abort_handled = cmd.request
         self._abort_all()
         self.operator_text("task: aborted")  # an abort is always reported (TASK-019)
-        on_abort = self.ini.find("RS274NGC", "ON_ABORT_COMMAND")
-        if on_abort and self.state == STATE.ON:
-            # [RS274NGC]ON_ABORT_COMMAND (e.g. o<on_abort> call) runs after every abort
-            outcome = self._start_mdi(on_abort)
-            if outcome is not True:
-                self.operator_error(f"ON_ABORT_COMMAND: {outcome}")
+        self._run_on_abort(EMC_ABORT_TASK_ABORT)
 
     def _abort_all(self) -> None:
         """Abort as LinuxCNC's task does on STOP, E-stop, machine off and run-time errors:
@@ -660,8 +673,46 @@ class Task:
         self.is_reading_done = True
         self.is_waiting_for_synch = False
         self.delay_until = 0.0
+        self.input_wait = None
         self.pending_serial = 0
         self.idle_reading_s = 0.0
+
+    def _run_on_abort(self, reason: int) -> None:
+        """[RS274NGC]ON_ABORT_COMMAND (e.g. ``O <on_abort> call``) after an abort or an
+        interpreter error, with the reason (LinuxCNC's EMC_ABORT_*) as its argument
+        (REMAP-037, REMAP-038): it runs as an MDI command, so its queue busters synchronise.
+        Not in E-stop (nothing could move), nor for an error of the command itself."""
+        if self.is_running_on_abort:  # the command itself failed or was aborted
+            self.is_running_on_abort = False
+            return
+        if self.state != STATE.ON:
+            return
+        command = self.interp.abort_command(reason)
+        if command is None:
+            return
+        self.is_running_on_abort = True
+        outcome = self._start_mdi(command)
+        if outcome is not True:
+            self.is_running_on_abort = False
+            self.operator_error(f"ON_ABORT_COMMAND: {outcome}")
+
+    def _python_modules(self) -> dict:
+        """``emctask`` for the interpreter's Python (PY-024, PY-025): task's status, its
+        INI file and its operator messages."""
+        from task.interp.python import emctask
+
+        def message(kind: str, text: str) -> None:
+            if not hasattr(self, "outbox"):  # (TOPLEVEL's __init__, at start-up)
+                log.info("%s", text)
+            elif kind == "error":
+                self.operator_error(text)
+            elif kind == "text":
+                self.operator_text(text)
+            else:
+                self._write_error_channel(emc.EMC_OPERATOR_DISPLAY(display=emc.fit_text(text)))
+
+        emctask.bind(self.stat, getattr(self.ini, "path", ""), message)
+        return {"emctask": emctask}
 
     # ================================================================ planning
     def _plan(self) -> None:
@@ -798,7 +849,11 @@ class Task:
         if self.pending_serial:
             self.stat.echo_serial_number = self.pending_serial
             self.stat.status = RCS_STATUS.ERROR
+        was_mdi = self.run is Run.MDI
         self._abort()
+        self._run_on_abort(
+            EMC_ABORT_INTERPRETER_ERROR_MDI if was_mdi else EMC_ABORT_INTERPRETER_ERROR
+        )
 
     # ================================================================ execution
     def _execute(self) -> None:
@@ -834,6 +889,9 @@ class Task:
                     return
                 # the applied tool length offset (G43/G49), in step with the program
                 self.stat.task.toolOffset = msg.offset
+            elif isinstance(msg, emc.EMC_AUX_INPUT_WAIT):
+                if not self._is_motion_done() or not self._is_input_wait_over(msg, now):
+                    return
             elif isinstance(msg, emc.EMC_SYSTEM_CMD):
                 if not self._is_everything_done() or not self._start_system_command(msg):
                     return
@@ -857,6 +915,33 @@ class Task:
                     return
             if self.queue:  # (an error above may have aborted the run and emptied it)
                 self.queue.popleft()
+
+    def _is_input_wait_over(self, msg: emc.EMC_AUX_INPUT_WAIT, now: float) -> bool:
+        """M66 (and emccanon.WAIT): wait, as LinuxCNC's task, until the digital input is
+        high or low (L3, L4), or goes high or low (L1, L2: seen low first, or high), or the
+        timeout (Q) passes, which sets input_timeout (GET_EXTERNAL_*_INPUT then give -1). An
+        immediate read (L0), and an analog input, do not wait."""
+        mode = emc.WAIT_MODE
+        if self.input_wait is None:
+            self.stat.task.input_timeout = 0
+            if msg.input_type != emc.INPUT_TYPE.DIGITAL or msg.wait_type == mode.IMMEDIATE:
+                return True
+            self.input_wait = (msg.wait_type, now + msg.timeout)
+        wait_type, deadline = self.input_wait
+        is_high = bool(self.stat.motion.synch_di[msg.index])
+        if wait_type == mode.RISE and not is_high:
+            wait_type = mode.HIGH  # low seen: now the rise
+        elif wait_type == mode.FALL and is_high:
+            wait_type = mode.LOW
+        self.input_wait = (wait_type, deadline)
+        if (wait_type == mode.HIGH and is_high) or (wait_type == mode.LOW and not is_high):
+            self.input_wait = None
+            return True
+        if now >= deadline:
+            self.input_wait = None
+            self.stat.task.input_timeout = 1
+            return True
+        return False
 
     def _stamp_next_move(self, motion_id: int) -> bool:
         """Give ``motion_id`` to the move queued right after it (as LinuxCNC's task fills
@@ -894,6 +979,7 @@ class Task:
             return
         was_mdi = self.run is Run.MDI
         self.run = Run.IDLE
+        self.is_running_on_abort = False
         if self.pending_serial:
             self.stat.echo_serial_number = self.pending_serial
             self.stat.status = RCS_STATUS.DONE
@@ -901,7 +987,7 @@ class Task:
         if was_mdi and self.mdi_queue:
             serial, text = self.mdi_queue.popleft()
             self.stat.echo_serial_number = serial
-            outcome = self._start_mdi(text)
+            outcome = self._start_mdi_or_abort(text)
             if outcome is True:
                 self.pending_serial = serial
             else:

@@ -9,7 +9,10 @@ Prints one JSON object::
 
 ``short_moves`` is a 50,000-line program of short G1 moves (``bigprog_50k.ngc`` from
 ``../shared/reference/programs`` when it is there, otherwise one generated like it);
-``subroutines`` is a loop that calls an O-word subroutine 5,000 times; ``oword_subs`` is the
+``subroutines`` is a loop that calls an O-word subroutine 5,000 times; ``remaps`` is 6,000
+lines each with a remapped code (``-i remap.ini``): M400 runs an NGC procedure with a prolog
+and an epilog in Python, M401 a Python handler, G88.6 a Python handler with argspec words;
+``oword_subs`` is the
 shared subroutine-heavy program ``oword_subs.ngc`` from the same folder (left out when it is
 not there): small, so its figure is mostly process start-up. Each figure is
 interpreted lines (every line read, loops counted as often as they run) divided by the median
@@ -38,7 +41,15 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(REPO))
 
-REFERENCE_PROGRAMS = REPO.parent / "shared" / "reference" / "programs"
+# ../shared/reference/programs of the checkout (a helper's worktree is one folder deeper)
+REFERENCE_PROGRAMS = next(
+    (
+        folder / "shared" / "reference" / "programs"
+        for folder in (REPO.parent, REPO.parent.parent)
+        if (folder / "shared" / "reference" / "programs").is_dir()
+    ),
+    REPO.parent / "shared" / "reference" / "programs",
+)
 REFERENCE = REFERENCE_PROGRAMS / "bigprog_50k.ngc"
 OWORD_SUBS = REFERENCE_PROGRAMS / "oword_subs.ngc"
 RS274 = "/usr/bin/rs274"
@@ -53,7 +64,7 @@ def short_moves_program(path: Path) -> None:
         "%",
         "(50,000 short moves)",
         "G21 G17 G40 G49 G80 G90 G94 G54",
-        "G64",
+        "G64 F1000",
         "G0 Z10",
         "G0 X0 Y0",
     ]
@@ -83,22 +94,90 @@ M2
 """)
 
 
-def count_lines(program: Path, folder: Path) -> int:
+REMAP_INI = """[RS274NGC]
+SUBROUTINE_PATH = .
+REMAP=M400 modalgroup=10 argspec=P prolog=prolog ngc=m400 epilog=epilog
+REMAP=M401 modalgroup=10 argspec=Pq python=m401
+REMAP=G88.6 modalgroup=1 argspec=XYp python=g886
+
+[PYTHON]
+PATH_PREPEND = .
+TOPLEVEL = toplevel.py
+"""
+REMAP_FILES = {
+    "toplevel.py": "import remap\n",
+    "remap.py": """from interpreter import INTERP_OK
+
+
+def prolog(self, **words):
+    self.params["scale"] = 0.5
+    return INTERP_OK
+
+
+def epilog(self, **words):
+    self.params["_last"] = self.params["result"]
+    return INTERP_OK
+
+
+def m401(self, **words):
+    self.params["_sum"] = self.params["_sum"] + words["p"]
+    return INTERP_OK
+
+
+def g886(self, **words):
+    self.execute("G1 X%.4f Y%.4f" % (words["x"], words["y"]))
+    return INTERP_OK
+""",
+    "m400.ngc": """o<m400> sub
+#<result> = [#<p> * #<scale>]
+G1 X[#<result> / 1000] Y0
+o<m400> endsub
+M2
+""",
+}
+
+
+def remap_program(path: Path) -> None:
+    """6,000 lines, each with a remapped code: NGC and Python handlers in turn."""
+    for name, text in REMAP_FILES.items():
+        (path.parent / name).write_text(text)
+    (path.parent / "remap.ini").write_text(REMAP_INI)
+    lines = ["G21 G90 G64 F1000", "#<_sum> = 0", "#<_last> = 0"]
+    for k in range(2000):
+        lines.append(f"M400 P{k}")
+        lines.append(f"M401 P{k} Q1")
+        lines.append(f"G88.6 X{k % 50 * 0.1:.1f} Y{k % 7 * 0.2:.1f}")
+    lines += ["G0 X0 Y0", "M2"]
+    path.write_text("\n".join(lines) + "\n")
+
+
+def count_lines(program: Path, folder: Path, ini: Path | None = None) -> int:
     """Lines the interpreter reads (loops and calls re-read theirs), counted in-process."""
+    from cnc.ini import IniFile
     from task.interp.canon import PrintingCanon
     from task.interp.errors import INTERP_ENDFILE, INTERP_EXIT
     from task.interp.interp import Interpreter
 
     canon = PrintingCanon(io.StringIO().write)
-    interp = Interpreter(canon, parameter_file=str(folder / "count.var"))
-    interp.init()
-    interp.open(str(program))
-    count = 0
-    while True:
-        status = interp.read()
-        count += 1
-        if status == INTERP_ENDFILE or interp.execute() == INTERP_EXIT:
-            break
+    interp = Interpreter(
+        canon,
+        ini=None if ini is None else IniFile.load(ini),
+        parameter_file=str(folder / "count.var"),
+    )
+    cwd = os.getcwd()
+    os.chdir(folder)  # (the INI's folders are relative)
+    try:
+        interp.init()
+        interp.open(str(program))
+        count = 0
+        while True:
+            status = interp.read()
+            count += 1
+            if status == INTERP_ENDFILE or interp.execute() == INTERP_EXIT:
+                break
+        interp.exit()
+    finally:
+        os.chdir(cwd)
     return count
 
 
@@ -121,9 +200,11 @@ def median_times(commands: list[list[str]], cwd: Path, runs: int) -> list[float]
     return [statistics.median(measured) for measured in times]
 
 
-def measure(program: Path, folder: Path, runs: int) -> dict:
-    lines = count_lines(program, folder)
+def measure(program: Path, folder: Path, runs: int, ini: Path | None = None) -> dict:
+    lines = count_lines(program, folder, ini)
     args = ["-g", "-t", "tool.tbl", "-v", "params.var", program.name]
+    if ini is not None:
+        args = ["-i", ini.name, *args]
     commands = [[sys.executable, "-m", "cnc", "rs274", *args]]
     if os.path.exists(RS274):
         commands.append([RS274, *args])
@@ -155,9 +236,12 @@ def main(argv: list[str] | None = None) -> int:
         short_moves_program(short)
         subs = folder / "subroutines.ngc"
         subroutine_program(subs)
+        remaps = folder / "remaps.ngc"
+        remap_program(remaps)
         report = {
             "short_moves": measure(short, folder, options.runs),
             "subroutines": measure(subs, folder, options.runs),
+            "remaps": measure(remaps, folder, options.runs, folder / "remap.ini"),
         }
         if OWORD_SUBS.exists():
             shutil.copy(OWORD_SUBS, folder / OWORD_SUBS.name)

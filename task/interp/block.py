@@ -197,8 +197,8 @@ O_OPS = [
     "M_99",
     "O_",
 ]
-# call types
-CT_NONE, CT_NGC_OWORD_SUB, CT_NGC_M98_SUB = 0, 1, 2
+# call types (a call frame's kind; Python O-word procedures and remaps may yield and resume)
+CT_NONE, CT_NGC_OWORD_SUB, CT_NGC_M98_SUB, CT_PYTHON_OWORD_SUB, CT_REMAP = 0, 1, 2, 3, 4
 
 
 def is_a_cycle(motion: int) -> bool:
@@ -235,6 +235,15 @@ class Block:
     call_type = -1
     params: list[float] | None = None
     param_cnt = 0
+    # remapping (remap.py): the steps of this block that run a remap, the steps done, the
+    # remap running now, whether a remapped code meant its built-in inside its own procedure
+    remappings: set[int] | None = None
+    breadcrumbs: set[int] | None = None
+    executing_remap = None
+    builtin_used = False
+    phase = 0
+    saved_line_number = 0
+    is_mdi_remap = False  # found in an MDI line (its saved_line_number is no program line)
 
     def __init__(self) -> None:
         self.g_modes = [-1] * 17

@@ -2,6 +2,10 @@
 
     cnc rs274 [-t TOOL_TABLE] [-v VAR_FILE] [-i INI] [-b] [-s] [-g] [-n 0|1|2] [FILE [OUT]]
 
+Options may follow the file names, as GNU getopt lets them (``cnc rs274 -g prog.ngc -t
+tool.tbl``). With ``-i``, the INI's remaps and ``[PYTHON]`` plug-in are used; what Python code
+prints comes out in order with the canonical calls, as rs274 (unbuffered) prints it.
+
 Output goes to stdout (or OUT) in rs274's format; ``executing``, errors and the failing line go
 to stderr (with ``-s``, followed by the error's stack of LinuxCNC function names, see
 ``stack.py``); the exit status is 0, or 1 after an interpreter error (with ``-n 2``, the
@@ -13,6 +17,7 @@ from __future__ import annotations
 
 import contextlib
 import getopt
+import io
 import os
 import sys
 
@@ -75,8 +80,47 @@ class _Out:
 
 def _err(out: _Out, text: str) -> None:
     out.flush()
-    _write_bytes(sys.stderr, text)
-    sys.stderr.flush()
+    stderr = sys.stderr
+    _write_bytes(getattr(stderr, "stream", stderr), text)
+    stderr.flush()
+
+
+class _PythonStdout(io.TextIOBase):
+    """sys.stdout during a run: what user Python code prints joins the canonical calls in
+    order (as UTF-8 bytes, as Python writes them)."""
+
+    encoding = "utf-8"
+
+    def __init__(self, out: _Out) -> None:
+        self.out = out
+
+    def write(self, text: str) -> int:
+        self.out.append(text.encode("utf-8", "replace").decode("latin-1"))
+        return len(text)
+
+    def writable(self) -> bool:
+        return True
+
+
+class _PythonStderr(io.TextIOBase):
+    """sys.stderr during a run: the canonical calls so far go out first."""
+
+    encoding = "utf-8"
+
+    def __init__(self, out: _Out, stream) -> None:
+        self.out = out
+        self.stream = stream
+
+    def write(self, text: str) -> int:
+        self.out.flush()
+        self.stream.write(text)
+        return len(text)
+
+    def flush(self) -> None:
+        self.stream.flush()
+
+    def writable(self) -> bool:
+        return True
 
 
 def _report(out: _Out, interp: Interpreter, error: InterpError) -> None:
@@ -163,7 +207,7 @@ def _mdi_then_continue(interp: Interpreter, out: _Out, block_delete: bool) -> bo
 def main(argv: list[str]) -> int:
     prog = "rs274"
     try:
-        opts, args = getopt.getopt(argv, "p:t:v:bsn:gi:l:T")
+        opts, args = getopt.gnu_getopt(argv, "p:t:v:bsn:gi:l:T")
     except getopt.GetoptError:
         sys.stderr.write(USAGE.format(prog=prog))
         return 1
@@ -209,6 +253,14 @@ def main(argv: list[str]) -> int:
             return 1
         stdout = out_file
     out = _Out(stdout)
+    saved = sys.stdout, sys.stderr, os.environ.get("INI_FILE_NAME")
+    if out_file is None:
+        sys.stdout = _PythonStdout(out)
+    sys.stderr = _PythonStderr(out, sys.stderr)
+    if ini_path is not None:  # (user Python code may read it, as under rs274)
+        os.environ["INI_FILE_NAME"] = ini_path
+    else:
+        os.environ.pop("INI_FILE_NAME", None)
     try:
         status = _run(
             args, out, tool_files, var_file, block_delete, do_next, go, ini_path, task, print_stack
@@ -223,6 +275,11 @@ def main(argv: list[str]) -> int:
             os.dup2(devnull, sys.stdout.fileno())
         return 1
     finally:
+        sys.stdout, sys.stderr = saved[0], saved[1]
+        if saved[2] is None:
+            os.environ.pop("INI_FILE_NAME", None)
+        else:
+            os.environ["INI_FILE_NAME"] = saved[2]
         if out_file is not None:
             out_file.close()
 
@@ -246,8 +303,8 @@ def _run(
 
         try:
             ini = IniFile.load(ini_path)
-        except IniError:
-            _err(out, f"Unable to open inifile:{ini_path}:\n")
+        except IniError as error:
+            _err(out, f"Unable to open inifile:{ini_path}:\n{error}\n")
     canon = PrintingCanon(out.append, tools, out.flush)
     interp = Interpreter(canon, parameter_file=var_file, task=task)
     if print_stack:
@@ -260,6 +317,7 @@ def _run(
         interp.init()
     except InterpError as error:
         _report(out, interp, error)
+        interp.release_python()
         return 1
     if not args:
         status = interpret_from_keyboard(interp, out, block_delete)
@@ -268,6 +326,7 @@ def _run(
             interp.open(args[0])
         except InterpError as error:
             _report(out, interp, error)
+            interp.release_python()
             return 1
         status = interpret_from_file(interp, out, do_next, block_delete)
         interp.close()

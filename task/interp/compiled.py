@@ -26,7 +26,7 @@ from collections.abc import Callable
 from . import ldmath
 from .block import CT_NGC_OWORD_SUB, O_call, O_sub, OWordBlock
 from .errors import InterpError
-from .params import PA_USE_LOOKUP
+from .params import PA_PYTHON, PA_USE_LOOKUP
 from .reader import (
     _NO_ARGUMENTS,
     _NUMBER_SPAN,
@@ -57,6 +57,7 @@ from .reader import (
 )
 
 Thunk = Callable[[], float]
+_COMPUTED = PA_USE_LOOKUP | PA_PYTHON  # named parameters whose value is computed when read
 
 
 class _SyntaxError(Exception):
@@ -266,7 +267,7 @@ class Compiler:
             # case); predefined, INI and HAL ones through find_named_param
             level = 0 if is_global else interp.call_level
             entry = contexts[level].named_params.get(name)
-            if entry is not None and not entry[1] & PA_USE_LOOKUP:
+            if entry is not None and not entry[1] & _COMPUTED:
                 return entry[0]
             exists, value = find(name)
             if exists:
@@ -494,7 +495,9 @@ class OWordPlan(LinePlan):
             value = slots[0] = thunk()
             values.append(value)
         if otype == O_call:
-            block.call_type = CT_NGC_OWORD_SUB
+            block.call_type = (
+                CT_NGC_OWORD_SUB if interp.python is None else interp.call_type_of(block.o_name)
+            )
             block.param_cnt = len(values)
             block.params = values + [0.0] * (INTERP_SUB_PARAMS - len(values))
         elif otype in _TESTS:

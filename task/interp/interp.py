@@ -147,6 +147,36 @@ from .offsets import OffsetsMixin
 from .owords import Context, OWordMixin
 from .params import ParamsMixin
 from .reader import LINELEN, ReaderMixin, close_and_downcase, downcase
+from .remap import (
+    CS_NORMAL,
+    EMC_DEBUG_UNCONDITIONAL,
+    MAX_NESTED_REMAPS,
+    STEP_COMMENT,
+    STEP_CONTROL_MODE,
+    STEP_COORD_SYSTEM,
+    STEP_CUTTER_COMP,
+    STEP_DISTANCE_MODE,
+    STEP_DWELL,
+    STEP_FEED_MODE,
+    STEP_G92_IS_APPLIED,
+    STEP_IJK_DISTANCE_MODE,
+    STEP_LATHE_DIAMETER_MODE,
+    STEP_LENGTH_UNITS,
+    STEP_M_GROUP,
+    STEP_MGROUP4,
+    STEP_MODAL_0,
+    STEP_MOTION,
+    STEP_PREPARE,
+    STEP_RETRACT_MODE,
+    STEP_SET_FEED_RATE,
+    STEP_SET_PLANE,
+    STEP_SET_SPINDLE_SPEED,
+    STEP_SPINDLE_MODE,
+    STEP_TOOL_LENGTH_OFFSET,
+    RemapError,
+    RemapMixin,
+    parse_remaps,
+)
 from .stack import error_stack
 from .tools import ToolsMixin
 
@@ -156,6 +186,7 @@ LOAD_CHUNK_BYTES = 1 << 18  # (about 8,000 lines of G-code)
 class Interpreter(
     ParamsMixin,
     ReaderMixin,
+    RemapMixin,
     OWordMixin,
     MCodesMixin,
     OffsetsMixin,
@@ -174,10 +205,12 @@ class Interpreter(
         parameter_file: str = "",
         task: int = 0,
         hal: Callable[[str], float | None] | None = None,
+        python_modules: dict | None = None,
     ) -> None:
         """``ini`` is a cnc.ini.IniFile or None; ``parameter_file`` the .var file; ``task``
         the value of #<_task>; ``hal`` looks up a HAL pin, signal or parameter by name for
-        #<_hal[...]> (None: there is no HAL, as in rs274)."""
+        #<_hal[...]> (None: there is no HAL, as in rs274); ``python_modules`` more
+        built-in modules for the embedded Python (task gives ``emctask``)."""
         self.canon = canon
         self.hal = hal
         canon.linetext = self._get_linetext
@@ -186,6 +219,22 @@ class Interpreter(
         self.task = task
         # where rs274's stray diagnostics go (a standalone run passes stderr)
         self.report: Callable[[str], object] = lambda text: None
+        # remapping and embedded Python (remap.py, python/): none until init() reads an INI
+        self.remaps = None
+        self.g_remapped: dict = {}  # G code x 10 -> Remap (read_g)
+        self.m_remapped: dict = {}
+        self.is_f_remapped = False
+        self.remap_level = 0
+        self.remap_blocks: list[Block | None] = [None] * MAX_NESTED_REMAPS
+        self.call_state = CS_NORMAL
+        self.nested_executes = 0  # self.execute() of Python code under way
+        self.saved_error = ""  # set_errormsg(): the message of a handler's INTERP_ERROR
+        self.debugmask = 0
+        self.log_level = 0
+        self.python = None  # the [PYTHON] plug-in (python/plugin.py)
+        self.python_view = None  # self of Python code (python/view.py)
+        self.python_modules = python_modules or {}
+        self.is_python_started = False  # namedparams and __init__ ran (once)
         self.parameters = [0.0] * 5602
         self.parameter_assignments: list[tuple[int, float]] = []
         self.named_parameter_assignments: list[tuple[str, float]] = []
@@ -234,6 +283,12 @@ class Interpreter(
         self._compiled = _Uncached()
         self._plans = _Uncached()
 
+    def _unwind_after_error(self) -> None:
+        """An error returns from every call; inside Python's self.execute(), only from the
+        calls it made (python_execute does that), not from the remap that runs it."""
+        if not self.nested_executes:
+            self.unwind_call()
+
     def _note_stack(self, error: InterpError) -> None:
         if self.has_error_stack and not error.stack:
             error.stack = error_stack(error.__traceback__, error.message)
@@ -256,6 +311,7 @@ class Interpreter(
         self.return_value = 0.0
         self.value_returned = 0
         self.remap_level = 0
+        self.call_state = CS_NORMAL
         self.num_spindles = 1
         self.active_spindle = 0
         self.center_arc_radius_tolerance_inch = CENTER_ARC_RADIUS_TOLERANCE_INCH
@@ -372,6 +428,8 @@ class Interpreter(
         self._plans.clear()  # plans depend on the axes
         self.synch()
         self.init_tool_parameters()
+        if self.ini is not None and self.python is not None and not self.is_python_started:
+            self.start_python()
         return INTERP_OK
 
     def _read_ini(self, ini) -> None:
@@ -465,6 +523,32 @@ class Interpreter(
         self.disable_g92_persistence = get_int("RS274NGC", "DISABLE_G92_PERSISTENCE", 0)
         self.disable_fanuc_style_sub = get_int("RS274NGC", "DISABLE_FANUC_STYLE_SUB", 0)
         self.on_abort_command = ini.find("RS274NGC", "ON_ABORT_COMMAND")
+        self.debugmask = _debug_flags(ini.find("EMC", "DEBUG")) | EMC_DEBUG_UNCONDITIONAL
+        self.log_level = get_int("RS274NGC", "LOG_LEVEL", 0)
+        if self.python is None and ini.find("PYTHON", "TOPLEVEL") is not None:
+            self.configure_python(ini)
+        self._read_remaps(ini)
+
+    def _read_remaps(self, ini) -> None:
+        """[RS274NGC]REMAP lines (REMAP-003..011); every bad one is reported as file:line."""
+        entries = ini.entries("RS274NGC", "REMAP")
+        if not entries:
+            self.remaps, self.g_remapped, self.m_remapped = None, {}, {}
+            self.is_f_remapped = False
+            return
+        python = self.python
+        try:
+            table, warnings = parse_remaps(
+                entries,
+                find_ngc=self.find_ngc_file,
+                find_python=None if python is None else lambda name: python.find("remap", name),
+            )
+        except RemapError as error:
+            raise InterpError(str(error)) from None
+        for warning in warnings:
+            self.report(warning + "\n")
+        self.remaps, self.g_remapped, self.m_remapped = table, table.g, table.m
+        self.is_f_remapped = "F" in table.letter
 
     # ================================================================= units
     def u2p_len(self, u: float) -> float:
@@ -675,10 +759,39 @@ class Interpreter(
     def exit(self) -> int:
         self.save_parameters(self.parameter_file or "rs274ngc.var")
         self.reset()
+        self.stop_python()
         return INTERP_OK
+
+    def on_abort(self, reason: int, message: str = "") -> int:
+        """After an abort: reset, and run [RS274NGC]ON_ABORT_COMMAND with the reason as its
+        argument (REMAP-037); returns -1 when there is none, else its status."""
+        command = self.abort_command(reason)
+        if command is None:
+            return -1
+        return self.execute(command)
+
+    def abort_command(self, reason: int) -> str | None:
+        """What on_abort does before it runs ON_ABORT_COMMAND, for a caller that runs the
+        command itself (task, as an MDI command): reset, forget the flags an interrupted
+        remap may have left set; the command, an O-word call with the reason (LinuxCNC's
+        EMC_ABORT_*) as its argument, or None when there is none."""
+        self.reset()
+        self.mdi_interrupt = False
+        self.toolchange_flag = self.probe_flag = self.input_flag = False
+        command = self.on_abort_command
+        if not command:
+            return None
+        if command.lower().replace(" ", "").endswith("call"):  # O<on_abort> call [reason]
+            return f"{command} [{reason}]"
+        return command  # any other MDI line (e.g. M9) as it is
 
     # ================================================================= read
     def read(self, command: str | None = None) -> int:
+        if self.call_state and command is None:
+            # a Python handler waits to resume: its block is executed again (remap.py)
+            status = self.resume_read()
+            if status is not None:
+                return status
         try:
             lines = self.file_lines
             if (
@@ -699,7 +812,7 @@ class Interpreter(
             return self._read(command)
         except InterpError as error:
             self._note_stack(error)
-            self.unwind_call()
+            self._unwind_after_error()
             raise
 
     def _read(self, command: str | None, has_plan: bool = False) -> int:
@@ -929,6 +1042,8 @@ class Interpreter(
         if not self.skipping_o:
             self.enhance_block(block)
             self.check_items(block)
+            if self.remaps is not None:
+                self.find_remappings(block)
 
     # ================================================================ execute
     def execute(self, command: str | None = None) -> int:
@@ -943,13 +1058,13 @@ class Interpreter(
                     return planned[0](planned[1])
                 except InterpError as error:
                     self._note_stack(error)
-                    self.unwind_call()
+                    self._unwind_after_error()
                     raise
         try:
             return self._execute(command)
         except InterpError as error:
             self._note_stack(error)
-            self.unwind_call()
+            self._unwind_after_error()
             raise
 
     def _execute(self, command: str | None) -> int:
@@ -977,29 +1092,39 @@ class Interpreter(
                 if self.mdi_interrupt:
                     self.mdi_interrupt = False
                     mdi_mode = True
-            while mdi_mode and self.call_level:
-                deadline = self.slice_deadline
-                if deadline is not None and time.monotonic() >= deadline:
-                    self.is_mdi_call_sliced = True
-                    return INTERP_OK
-                status = self.read()
-                if status > INTERP_MIN_ERROR:  # e.g. seeking a subroutine no file defines
-                    raise InterpError("File not open")
-                status = self.execute()
-                if status != INTERP_OK:
-                    if status == INTERP_EXECUTE_FINISH:
-                        self.mdi_interrupt = True
-                    return status
-            self.mdi_interrupt = False
             if mdi_mode:
-                self.canon.FINISH()
-                self.offset_map.clear()
+                return self.run_mdi_call(is_finishing=True)
+            self.mdi_interrupt = False
             return INTERP_OK
         if self.skipping_o:
             return INTERP_OK
         self.apply_parameter_assignments()
         if self.line_length != 0:
+            if block.remappings:
+                return self.execute_remapped_block(block, mdi_mode)
             return self.execute_block(block)
+        return INTERP_OK
+
+    def run_mdi_call(self, is_finishing: bool) -> int:
+        """An MDI line's subroutine call (or remap) runs to its end, in slices up to
+        ``slice_deadline``; ``is_finishing``: then FINISH() (an MDI line's own call)."""
+        while self.call_level:
+            deadline = self.slice_deadline
+            if deadline is not None and time.monotonic() >= deadline:
+                self.is_mdi_call_sliced = True
+                return INTERP_OK
+            status = self.read()
+            if status > INTERP_MIN_ERROR:  # e.g. seeking a subroutine no file defines
+                raise InterpError("File not open")
+            status = self.execute()
+            if status != INTERP_OK:
+                if status == INTERP_EXECUTE_FINISH:
+                    self.mdi_interrupt = True
+                return status
+        self.mdi_interrupt = False
+        if is_finishing:
+            self.canon.FINISH()
+            self.offset_map.clear()
         return INTERP_OK
 
     # ======================================================= block checking
@@ -1058,6 +1183,7 @@ class Interpreter(
                         G_72_1,
                         G_72_2,
                     )
+                    and not self.is_user_gcode(mode1)
                 ):
                     raise InterpError("All axes missing with motion code")
             block.motion_to_be = mode1
@@ -1118,6 +1244,8 @@ class Interpreter(
                 raise InterpError("Cannot use g53 incremental")
 
     def check_other_codes(self, block: Block) -> None:
+        if self.remaps is not None and self.has_user_code(block):
+            return  # the remap's argspec says which words it takes
         motion = block.motion_to_be
         g_modes = block.g_modes
         m_modes = block.m_modes
@@ -1245,37 +1373,20 @@ class Interpreter(
             self.qc.append([QOTHER, name, args])
 
     def execute_block(self, block: Block) -> int:
+        """Execute a block in LinuxCNC's order of execution (execute_block_steps is the same
+        order, step by step, for blocks with remapped codes)."""
         block.line_number = self.sequence_number
         if block.comment:
             self.convert_comment(block.comment)
         if block.g_modes[GM_SPINDLE_MODE] != -1:
-            self.active_spindle = 0
-            if block.dollar_flag:
-                if block.dollar_number < 0 or block.dollar_number >= self.num_spindles:
-                    raise InterpError("Invalid spindle ($) number in Spindle Mode command")
-                self.active_spindle = int(block.dollar_number)
-            self.convert_spindle_mode(self.active_spindle, block)
+            self._spindle_mode_step(block)
         if block.g_modes[GM_FEED_MODE] != -1:
-            self.active_spindle = 0
-            if block.dollar_flag:
-                if block.dollar_number < 0 or block.dollar_number >= self.num_spindles:
-                    raise InterpError("Invalid spindle ($) number in Spindle Feed command")
-                self.active_spindle = int(block.dollar_number)
-            self.convert_feed_mode(block.g_modes[GM_FEED_MODE])
+            self._feed_mode_step(block)
         if block.f_flag and self.feed_mode != INVERSE_TIME:
             self.feed_rate = block.f_number
             self._enq("SET_FEED_RATE", block.f_number)
         if block.s_flag:
-            if block.dollar_flag:
-                if block.dollar_number < -1 or block.dollar_number >= self.num_spindles:
-                    raise InterpError("Invalid spindle ($) number in Spindle speed command")
-                if block.dollar_number == -1:
-                    for i in range(self.num_spindles):
-                        self.convert_speed(i, block)
-                else:
-                    self.convert_speed(int(block.dollar_number), block)
-            else:
-                self.convert_speed(0, block)
+            self._speed_step(block)
         if block.t_flag:
             self.convert_tool_select(block)
         self.convert_m(block)
@@ -1289,6 +1400,97 @@ class Interpreter(
         if self.probe_flag or self.input_flag or self.toolchange_flag:
             return INTERP_EXECUTE_FINISH
         return INTERP_OK
+
+    def execute_block_steps(self, block: Block) -> int:
+        """execute_block for a block with remapped codes (remap.py): each step runs once
+        (``block.breadcrumbs``), up to a remapped one, which starts its remap and returns
+        ``-step``; executed again when that remap has finished, the block continues."""
+        done = block.breadcrumbs
+        remapped = block.remappings
+        remaps = self.remaps
+        block.line_number = self.sequence_number
+        g_modes = block.g_modes
+        m_modes = block.m_modes
+        if block.comment and _once(done, STEP_COMMENT):
+            self.convert_comment(block.comment)
+        if g_modes[GM_SPINDLE_MODE] != -1 and _once(done, STEP_SPINDLE_MODE):
+            self._spindle_mode_step(block)
+        if g_modes[GM_FEED_MODE] != -1 and _once(done, STEP_FEED_MODE):
+            self._feed_mode_step(block)
+        if block.f_flag and self.feed_mode != INVERSE_TIME and _once(done, STEP_SET_FEED_RATE):
+            if STEP_SET_FEED_RATE in remapped:
+                return self.convert_remapped_code(block, STEP_SET_FEED_RATE, remaps.letter["F"])
+            self.feed_rate = block.f_number
+            self._enq("SET_FEED_RATE", block.f_number)
+        if block.s_flag and _once(done, STEP_SET_SPINDLE_SPEED):
+            if STEP_SET_SPINDLE_SPEED in remapped:
+                step = STEP_SET_SPINDLE_SPEED
+                return self.convert_remapped_code(block, step, remaps.letter["S"])
+            self._speed_step(block)
+        if block.t_flag and _once(done, STEP_PREPARE):
+            if STEP_PREPARE in remapped:
+                return self.convert_remapped_code(block, STEP_PREPARE, remaps.letter["T"])
+            self.convert_tool_select(block)
+        for group, step, convert in _M_STEPS:
+            code = m_modes[group]
+            if code != -1 and _once(done, step):
+                if step in remapped:
+                    return self.convert_remapped_code(block, step, remaps.m[code])
+                convert(self, block, code)
+        if g_modes[GM_MODAL_0] == G_4 and _once(done, STEP_DWELL):
+            self._enq("DWELL", block.p_number)
+        for group, step, convert in _G_STEPS:
+            if g_modes[group] != -1 and _once(done, step):
+                convert(self, g_modes[group], block)
+        motion = block.motion_to_be
+        if motion != -1 and _once(done, STEP_MOTION):
+            if STEP_MOTION in remapped:
+                return self.convert_remapped_code(block, STEP_MOTION, remaps.g[motion])
+            self.convert_motion(motion, block)
+        if m_modes[4] != -1 and _once(done, STEP_MGROUP4):
+            if STEP_MGROUP4 in remapped:
+                return self.convert_remapped_code(block, STEP_MGROUP4, remaps.m[m_modes[4]])
+            status = self.convert_stop(block)
+            if status != INTERP_OK:
+                return status
+        if self.probe_flag or self.input_flag or self.toolchange_flag:
+            return INTERP_EXECUTE_FINISH
+        return INTERP_OK
+
+    def _spindle_mode_step(self, block: Block) -> None:
+        """G96/G97"""
+        self.active_spindle = 0
+        if block.dollar_flag:
+            if block.dollar_number < 0 or block.dollar_number >= self.num_spindles:
+                raise InterpError("Invalid spindle ($) number in Spindle Mode command")
+            self.active_spindle = int(block.dollar_number)
+        self.convert_spindle_mode(self.active_spindle, block)
+
+    def _feed_mode_step(self, block: Block) -> None:
+        """G93/G94/G95"""
+        self.active_spindle = 0
+        if block.dollar_flag:
+            if block.dollar_number < 0 or block.dollar_number >= self.num_spindles:
+                raise InterpError("Invalid spindle ($) number in Spindle Feed command")
+            self.active_spindle = int(block.dollar_number)
+        self.convert_feed_mode(block.g_modes[GM_FEED_MODE])
+
+    def _g92_applied(self, g_code: int, block: Block) -> None:
+        with contextlib.suppress(InterpError):  # LinuxCNC ignores this status
+            self.convert_axis_offsets(g_code, block)
+
+    def _speed_step(self, block: Block) -> None:
+        """S"""
+        if block.dollar_flag:
+            if block.dollar_number < -1 or block.dollar_number >= self.num_spindles:
+                raise InterpError("Invalid spindle ($) number in Spindle speed command")
+            if block.dollar_number == -1:
+                for i in range(self.num_spindles):
+                    self.convert_speed(i, block)
+            else:
+                self.convert_speed(int(block.dollar_number), block)
+        else:
+            self.convert_speed(0, block)
 
     # ============================================================ comments
     def convert_comment(self, comment: str) -> int:
@@ -1313,8 +1515,12 @@ class Interpreter(
             canon.LOGOPEN(body[8:])
         elif lc.startswith("logappend,"):
             canon.LOGAPPEND(body[10:])
-        elif lc.startswith("py,") or lc.startswith("pyrun,") or lc.startswith("pyreload"):
-            raise InterpError("Python plugin not available")
+        elif lc.startswith("py,"):
+            self.run_python(body[3:])
+        elif lc.startswith("pyrun,"):
+            self.run_python(body[6:])
+        elif lc.startswith("pyreload"):
+            self.require_python().reload_if_changed()
         elif lc.startswith("abort,"):
             raise InterpError(self.convert_param_comment(body[6:]))
         elif lc == "logclose":
@@ -1398,7 +1604,10 @@ class Interpreter(
                     if i >= n or comment[i] != ">":
                         raise InterpError("Named parameter not terminated")
                     i += 1
-                    exists, value = self.find_named_param("".join(name))
+                    try:
+                        exists, value = self.find_named_param("".join(name))
+                    except InterpError:  # a namedparams function failed: no value
+                        exists = False
                     found = bool(exists)
                 else:
                     out.append("#")
@@ -1471,32 +1680,11 @@ class Interpreter(
         if g[GM_CONTROL_MODE] != -1:
             self.convert_control_mode(g[GM_CONTROL_MODE], block.p_number, block.q_number)
         if g[GM_DISTANCE_MODE] != -1:
-            mode = MODE_ABSOLUTE if g[GM_DISTANCE_MODE] == G_90 else MODE_INCREMENTAL
-            if mode != self.distance_mode:
-                self._enq(
-                    "COMMENT",
-                    "interpreter: distance mode changed to "
-                    + ("absolute" if mode == MODE_ABSOLUTE else "incremental"),
-                )
-                self.distance_mode = mode
+            self.convert_distance_mode(g[GM_DISTANCE_MODE])
         if g[GM_IJK_DISTANCE_MODE] != -1:
-            mode = MODE_ABSOLUTE if g[GM_IJK_DISTANCE_MODE] == G_90_1 else MODE_INCREMENTAL
-            if mode != self.ijk_distance_mode:
-                self._enq(
-                    "COMMENT",
-                    "interpreter: IJK distance mode changed to "
-                    + ("absolute" if mode == MODE_ABSOLUTE else "incremental"),
-                )
-                self.ijk_distance_mode = mode
+            self.convert_ijk_distance_mode(g[GM_IJK_DISTANCE_MODE])
         if g[GM_RETRACT_MODE] != -1:
-            if self.cutter_comp_side:
-                raise InterpError("Cannot change retract mode with cutter radius compensation on")
-            if g[GM_RETRACT_MODE] == G_98:
-                self._enq("COMMENT", "interpreter: retract mode set to old_z")
-                self.retract_mode = OLD_Z
-            else:
-                self._enq("COMMENT", "interpreter: retract mode set to r_plane")
-                self.retract_mode = R_PLANE
+            self.convert_retract_mode(g[GM_RETRACT_MODE])
         if g[GM_MODAL_0] != -1:
             self.convert_modal_0(g[GM_MODAL_0], block)
         if g[GM_G92_IS_APPLIED] != -1:
@@ -1504,6 +1692,36 @@ class Interpreter(
                 self.convert_axis_offsets(g[GM_G92_IS_APPLIED], block)
         if block.motion_to_be != -1:
             self.convert_motion(block.motion_to_be, block)
+
+    def convert_distance_mode(self, g_code: int) -> None:
+        mode = MODE_ABSOLUTE if g_code == G_90 else MODE_INCREMENTAL
+        if mode != self.distance_mode:
+            self._enq(
+                "COMMENT",
+                "interpreter: distance mode changed to "
+                + ("absolute" if mode == MODE_ABSOLUTE else "incremental"),
+            )
+            self.distance_mode = mode
+
+    def convert_ijk_distance_mode(self, g_code: int) -> None:
+        mode = MODE_ABSOLUTE if g_code == G_90_1 else MODE_INCREMENTAL
+        if mode != self.ijk_distance_mode:
+            self._enq(
+                "COMMENT",
+                "interpreter: IJK distance mode changed to "
+                + ("absolute" if mode == MODE_ABSOLUTE else "incremental"),
+            )
+            self.ijk_distance_mode = mode
+
+    def convert_retract_mode(self, g_code: int) -> None:
+        if self.cutter_comp_side:
+            raise InterpError("Cannot change retract mode with cutter radius compensation on")
+        if g_code == G_98:
+            self._enq("COMMENT", "interpreter: retract mode set to old_z")
+            self.retract_mode = OLD_Z
+        else:
+            self._enq("COMMENT", "interpreter: retract mode set to r_plane")
+            self.retract_mode = R_PLANE
 
     def convert_set_plane(self, g_code: int) -> None:
         side = self.cutter_comp_side
@@ -1756,8 +1974,9 @@ class Interpreter(
         return INTERP_OK
 
     # ============================================================== unwinding
-    def unwind_call(self) -> None:
-        while self.call_level > 0:
+    def unwind_call(self, level: int = 0) -> None:
+        """Return from every call (after an error), or from those above call ``level``."""
+        while self.call_level > level:
             sub = self.sub_context[self.call_level - 1]
             self.sub_context[self.call_level].named_params.clear()
             sub.subName = None
@@ -1773,8 +1992,17 @@ class Interpreter(
             elif self.file_lines is not None:
                 self.sequence_number = sub.sequence_number
             self.call_level -= 1
+        if level:
+            return
+        if self.remap_level and not self.sequence_number:
+            # the line of the remapped code, in a program (LinuxCNC leaves the 0 of
+            # enter_remap; for an MDI line there is no line to tell)
+            outermost = self.remap_blocks[1]
+            if not outermost.is_mdi_remap:
+                self.sequence_number = outermost.saved_line_number
         self.sub_name = None
         self.remap_level = 0
+        self.call_state = CS_NORMAL
         self.defining_sub = 0
         self.skipping_o = None
         self.skipping_to_sub = None
@@ -1820,6 +2048,69 @@ class _NoPlan(LinePlan):
 _SEEN_ONCE = _NoPlan("", "")  # read once so far
 _NO_PLAN = _NoPlan("", "")  # cannot be planned
 _FAST_FIRST = frozenset("nNgGxXyYzZaAbBcC")
+
+
+# execute_block_steps: convert_m's groups and convert_g's steps, in their order
+_M_STEPS = (
+    (5, STEP_M_GROUP[5], MCodesMixin.convert_m_group5),
+    (6, STEP_M_GROUP[6], MCodesMixin.convert_m_group6),
+    (7, STEP_M_GROUP[7], MCodesMixin.convert_m_group7),
+    (8, STEP_M_GROUP[8], MCodesMixin.convert_m_group8),
+    (9, STEP_M_GROUP[9], MCodesMixin.convert_m_group9),
+    (10, STEP_M_GROUP[10], MCodesMixin.convert_m_group10),
+)
+_G_STEPS = (
+    (GM_SET_PLANE, STEP_SET_PLANE, lambda i, code, b: i.convert_set_plane(code)),
+    (GM_LENGTH_UNITS, STEP_LENGTH_UNITS, lambda i, code, b: i.convert_length_units(code)),
+    (
+        GM_LATHE_DIAMETER_MODE,
+        STEP_LATHE_DIAMETER_MODE,
+        lambda i, code, b: i.convert_lathe_diameter_mode(code, b),
+    ),
+    (GM_CUTTER_COMP, STEP_CUTTER_COMP, lambda i, code, b: i.convert_cutter_compensation(code, b)),
+    (
+        GM_TOOL_LENGTH_OFFSET,
+        STEP_TOOL_LENGTH_OFFSET,
+        lambda i, code, b: i.convert_tool_length_offset(code, b),
+    ),
+    (GM_COORD_SYSTEM, STEP_COORD_SYSTEM, lambda i, code, b: i.convert_coordinate_system(code)),
+    (
+        GM_CONTROL_MODE,
+        STEP_CONTROL_MODE,
+        lambda i, code, b: i.convert_control_mode(code, b.p_number, b.q_number),
+    ),
+    (GM_DISTANCE_MODE, STEP_DISTANCE_MODE, lambda i, code, b: i.convert_distance_mode(code)),
+    (
+        GM_IJK_DISTANCE_MODE,
+        STEP_IJK_DISTANCE_MODE,
+        lambda i, code, b: i.convert_ijk_distance_mode(code),
+    ),
+    (GM_RETRACT_MODE, STEP_RETRACT_MODE, lambda i, code, b: i.convert_retract_mode(code)),
+    (GM_MODAL_0, STEP_MODAL_0, lambda i, code, b: i.convert_modal_0(code, b)),
+    (GM_G92_IS_APPLIED, STEP_G92_IS_APPLIED, lambda i, code, b: i._g92_applied(code, b)),
+)
+
+
+def _once(done: set[int], step: int) -> bool:
+    """LinuxCNC's ONCE(): whether ``step`` of a block is still to run (and tick it off)."""
+    if step in done:
+        return False
+    done.add(step)
+    return True
+
+
+def _debug_flags(value: str | None) -> int:
+    """[EMC]DEBUG: a number, often hexadecimal (0x00004000)."""
+    if value is None:
+        return 0
+    word = value.split()[0] if value.split() else "0"
+    try:
+        return int(word, 0)
+    except ValueError:
+        try:
+            return int(float(word))
+        except ValueError:
+            return 0
 
 
 def _realpath(path: str, base: str) -> str:

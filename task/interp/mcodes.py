@@ -57,38 +57,58 @@ class MCodesMixin:
 
     # ============================================================== M codes
     def convert_m(self, block: Block) -> None:
+        """The M codes of a block, group by group (stops, group 4, come last: convert_stop)."""
+        m_modes = block.m_modes
+        if m_modes[5] != -1:
+            self.convert_m_group5(block, m_modes[5])
+        if m_modes[6] != -1:
+            self.convert_m_group6(block, m_modes[6])
+        if m_modes[7] != -1:
+            self.convert_m_group7(block, m_modes[7])
+        if m_modes[8] != -1:
+            self.convert_m_group8(block, m_modes[8])
+        if m_modes[9] != -1:
+            self.convert_m_group9(block, m_modes[9])
+        if m_modes[10] != -1:
+            self.convert_m_group10(block, m_modes[10])
+
+    def convert_m_group5(self, block: Block, m5: int) -> None:
+        """M62..M68: digital and analog I/O."""
         canon = self.canon
-        m5 = block.m_modes[5]
-        if m5 != -1:
-            if m5 in (62, 63, 64, 65):
-                if self.cutter_comp_side:
-                    what = {62: "motion output", 63: "motion digital output"}.get(
-                        m5, "auxiliary digital output"
-                    )
-                    raise InterpError(f"Cannot set {what} with cutter radius compensation on")
-                if not block.p_flag:
-                    raise InterpError(f"No valid P word with M{m5}")
-                index = round_to_int(block.p_number)
-                {
-                    62: canon.SET_MOTION_OUTPUT_BIT,
-                    63: canon.CLEAR_MOTION_OUTPUT_BIT,
-                    64: canon.SET_AUX_OUTPUT_BIT,
-                    65: canon.CLEAR_AUX_OUTPUT_BIT,
-                }[m5](index)
-            elif m5 == 66:
-                self.convert_m66(block)
-            elif m5 in (67, 68):
-                if self.cutter_comp_side:
-                    raise InterpError(
-                        "Cannot set motion analog output with cutter radius compensation on"
-                        if m5 == 67
-                        else "Cannot set auxiliary analog output with cutter radius compensation on"
-                    )
-                if not block.e_flag or round_to_int(block.e_number) < 0:
-                    raise InterpError(f"Invalid analog index with M{m5}")
-                func = canon.SET_MOTION_OUTPUT_VALUE if m5 == 67 else canon.SET_AUX_OUTPUT_VALUE
-                func(round_to_int(block.e_number), block.q_number)
-        m6 = block.m_modes[6]
+        if m5 in (62, 63, 64, 65):
+            if self.cutter_comp_side:
+                what = {62: "motion output", 63: "motion digital output"}.get(
+                    m5, "auxiliary digital output"
+                )
+                raise InterpError(f"Cannot set {what} with cutter radius compensation on")
+            if not block.p_flag:
+                raise InterpError(f"No valid P word with M{m5}")
+            index = round_to_int(block.p_number)
+            {
+                62: canon.SET_MOTION_OUTPUT_BIT,
+                63: canon.CLEAR_MOTION_OUTPUT_BIT,
+                64: canon.SET_AUX_OUTPUT_BIT,
+                65: canon.CLEAR_AUX_OUTPUT_BIT,
+            }[m5](index)
+        elif m5 == 66:
+            self.convert_m66(block)
+        elif m5 in (67, 68):
+            if self.cutter_comp_side:
+                raise InterpError(
+                    "Cannot set motion analog output with cutter radius compensation on"
+                    if m5 == 67
+                    else "Cannot set auxiliary analog output with cutter radius compensation on"
+                )
+            if not block.e_flag or round_to_int(block.e_number) < 0:
+                raise InterpError(f"Invalid analog index with M{m5}")
+            func = canon.SET_MOTION_OUTPUT_VALUE if m5 == 67 else canon.SET_AUX_OUTPUT_VALUE
+            func(round_to_int(block.e_number), block.q_number)
+
+    def convert_m_group6(self, block: Block, m6: int) -> None:
+        """M6 and M61 (inside a remap of them, the built-in: noted for its epilog)."""
+        canon = self.canon
+        if self.remap_level and m6 in (6, 61):
+            self.remap_blocks[self.remap_level].builtin_used = True
         if m6 == 6:
             self.convert_tool_change()
         elif m6 == 61:
@@ -100,7 +120,9 @@ class MCodesMixin:
             self.toolchange_flag = True
             canon.CHANGE_TOOL_NUMBER(self.current_pocket)
             self.set_tool_parameters()
-        m7 = block.m_modes[7]
+
+    def convert_m_group7(self, block: Block, m7: int) -> None:
+        """M3, M4, M5, M19 and M70..M73."""
         if m7 in (3, 4, 5):
             if block.dollar_flag:
                 if block.dollar_number >= self.num_spindles or block.dollar_number < -1:
@@ -146,7 +168,9 @@ class MCodesMixin:
                 self._enq("WAIT_SPINDLE_ORIENT_COMPLETE", spindle, block.q_number)
         elif m7 in (70, 71, 72, 73):
             self.convert_context(m7)
-        m8 = block.m_modes[8]
+
+    def convert_m_group8(self, block: Block, m8: int) -> None:
+        """M7, M8, M9: coolant."""
         if m8 == 7:
             self._enq("MIST_ON")
             self.mist = True
@@ -158,7 +182,10 @@ class MCodesMixin:
             self.mist = False
             self._enq("FLOOD_OFF")
             self.flood = False
-        m9 = block.m_modes[9]
+
+    def convert_m_group9(self, block: Block, m9: int) -> None:
+        """M48..M53: overrides."""
+        canon = self.canon
         if m9 in (48, 49):
             if self.cutter_comp_side:
                 raise InterpError(
@@ -204,8 +231,10 @@ class MCodesMixin:
             else:
                 (canon.ENABLE_FEED_HOLD if on else canon.DISABLE_FEED_HOLD)()
                 self.feed_hold = on
-        m10 = block.m_modes[10]
-        if m10 != -1 and not canon.USER_DEFINED_FUNCTION(m10, block.p_number, block.q_number):
+
+    def convert_m_group10(self, block: Block, m10: int) -> None:
+        """M100..M199: user-defined M codes (external programs)."""
+        if not self.canon.USER_DEFINED_FUNCTION(m10, block.p_number, block.q_number):
             raise InterpError(f"Unknown m code used: M{m10}")
 
     def convert_m66(self, block: Block) -> None:

@@ -16,6 +16,8 @@ from .block import (
     CT_NGC_M98_SUB,
     CT_NGC_OWORD_SUB,
     CT_NONE,
+    CT_PYTHON_OWORD_SUB,
+    CT_REMAP,
     M_98,
     M_99,
     O_,
@@ -47,6 +49,8 @@ _SUB_ENDS = frozenset((O_endsub, O_return, M_99))
 _CALLS = frozenset((O_call, M_98))
 _LOOP_TESTS = frozenset((O_repeat, O_while))
 _LOOP_ENDS = frozenset((O_endrepeat, O_endwhile))
+# frames an 'O.. sub' may start (a remap's NGC procedure is one)
+_SUB_CALLS = frozenset((CT_NGC_OWORD_SUB, CT_PYTHON_OWORD_SUB, CT_REMAP, CT_NONE))
 
 
 class Context:
@@ -59,6 +63,8 @@ class Context:
         "m98_loop_counter",
         "named_params",
         "position",
+        "py_generator",
+        "py_kwargs",
         "saved_g_codes",
         "saved_m_codes",
         "saved_params",
@@ -84,6 +90,8 @@ class Context:
         self.saved_g_codes = _NO_G_CODES
         self.saved_m_codes = _NO_M_CODES
         self.saved_settings = _NO_SETTINGS
+        self.py_kwargs: dict = {}  # the words a remap passes its Python handlers
+        self.py_generator = None  # a Python handler that yielded, to resume
 
 
 _NO_PARAMS = (0.0,) * 30
@@ -146,6 +154,7 @@ class OWordMixin:
         frame.call_type = block.call_type
 
     def leave_context(self, restore: bool = False) -> None:
+        """Drop the call frame; ``restore``: M73's saved state comes back."""
         leaving = self.sub_context[self.call_level]
         if self.call_level < 1:
             raise InterpError("Bug: call stack underrun")
@@ -155,15 +164,18 @@ class OWordMixin:
         if restore and (leaving.context_status & 3) == 3:  # M73: restore on return
             self.restore_settings(self.call_level + 1)
 
-    def execute_call(self, frame: Context, call_type: int) -> None:
+    def execute_call(self, frame: Context, call_type: int, has_parameters: bool = False) -> None:
+        """Start an NGC procedure (``has_parameters``: its #1..#30 are set up already)."""
         previous = self.sub_context[self.call_level - 1]
         block = self.block
         if self.skipping_o:
             self.skipping_o = None
-        if call_type != CT_NGC_M98_SUB:
+        # (enter_call_parameters and save_return_point, inline: a call per O-word call less)
+        if call_type != CT_NGC_M98_SUB and not has_parameters:
             pars = self.parameters
             previous.saved_params = pars[1:31]
-            pars[1:31] = block.params
+            if block.params is not None:
+                pars[1:31] = block.params
         previous.position = -1 if self.file_lines is None else self.file_pos
         previous.filename = self.filename
         previous.sequence_number = self.sequence_number
@@ -186,6 +198,19 @@ class OWordMixin:
         except InterpError:
             self.call_level -= 1
             raise InterpError(f"Unable to open file <{block.o_name}>") from None
+
+    def enter_call_parameters(self, previous: Context, params) -> None:
+        """Keep the caller's #1..#30 (restored at the return) and set the procedure's."""
+        pars = self.parameters
+        previous.saved_params = pars[1:31]
+        if params is not None:
+            pars[1:31] = params
+
+    def save_return_point(self, previous: Context) -> None:
+        """Where the caller continues when the procedure returns (or fails)."""
+        previous.position = -1 if self.file_lines is None else self.file_pos
+        previous.filename = self.filename
+        previous.sequence_number = self.sequence_number
 
     def execute_return(self, frame: Context, call_type: int) -> None:
         block = self.block
@@ -290,7 +315,7 @@ class OWordMixin:
         frame = self.sub_context[self.call_level]
         if otype == O_ and frame.call_type not in (CT_NGC_M98_SUB, CT_NONE):
             raise InterpError("Fanuc 'O....' subroutine must be called with 'M98'")
-        if otype == O_sub and frame.call_type != CT_NGC_OWORD_SUB and frame.call_type != CT_NONE:
+        if otype == O_sub and frame.call_type not in _SUB_CALLS:
             raise InterpError("'O.... sub' subroutine must be called with 'O.... call'")
         if self.skipping_o:
             self.control_save_offset(block)
@@ -322,14 +347,27 @@ class OWordMixin:
             raise InterpError(
                 "'O.... endsub' or 'O.... return' must follow 'O.... sub' subroutine definition"
             )
+        is_remap = frame.call_type == CT_REMAP and self.call_level > 0
+        if is_remap:
+            status = self.run_epilog(frame)
+            if status != INTERP_OK:
+                return status  # the epilog yielded: this line is executed again
         self.execute_return(frame, frame.call_type)
+        if is_remap:
+            return self.remap_finished(self.remap_blocks[self.remap_level].phase)
         return INTERP_OK
 
     def _control_call(self, block: Block) -> int:
-        """``call`` and ``M98``"""
-        self.enter_context(block)
+        """``call`` and ``M98`` (a remap's call, a Python procedure: remap.py)"""
+        if not self.call_state:  # (not when a Python handler resumes)
+            self.enter_context(block)
         frame = self.sub_context[self.call_level]
-        self.execute_call(frame, frame.call_type)
+        call_type = frame.call_type
+        if call_type == CT_REMAP:
+            return self.execute_remap_call(frame)
+        if call_type == CT_PYTHON_OWORD_SUB:
+            return self.execute_python_call(frame)
+        self.execute_call(frame, call_type)
         return INTERP_OK
 
     def _control_do(self, block: Block) -> int:

@@ -31,6 +31,7 @@ PA_GLOBAL = 2
 PA_UNSET = 4
 PA_USE_LOOKUP = 8
 PA_FROM_INI = 16
+PA_PYTHON = 32  # computed by a function of the namedparams module (PY-026)
 
 _PREDEFINED = [
     "_line",
@@ -174,9 +175,15 @@ class ParamsMixin:
                     if value is not None:
                         return True, float(value)
             return False, 0.0
-        if entry[1] & PA_USE_LOOKUP:
-            return True, self.lookup_named_param(name)
+        if entry[1] & (PA_USE_LOOKUP | PA_PYTHON):
+            if entry[1] & PA_USE_LOOKUP:
+                return True, self.lookup_named_param(name)
+            return True, self.python_named_param(name)
         return True, entry[0]
+
+    def param_name(self, name: str) -> str:
+        """A parameter name given by Python code, as the reader spells it."""
+        return name if self.feature_no_downcase_oword else name.lower()
 
     def _fetch_ini_param(self, name: str) -> float | None:
         close = name.find("]", 6)

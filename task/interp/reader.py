@@ -13,7 +13,6 @@ import re
 from . import ldmath
 from .block import (
     CT_NGC_M98_SUB,
-    CT_NGC_OWORD_SUB,
     EMS,
     G_80,
     GEES,
@@ -298,6 +297,8 @@ class ReaderMixin:
         return end + 1
 
     def read_semicolon(self, line: str, counter: int, block: Block) -> int:
+        if self.linetext.startswith(";py,"):  # Python, run as the line is read (PY-027)
+            self.run_python(self.linetext[4:])
         return len(line)
 
     def read_d(self, line: str, counter: int, block: Block) -> int:
@@ -346,10 +347,16 @@ class ReaderMixin:
             raise InterpError("G-code out of range")
         if value < 0:
             raise InterpError("Negative g code used")
+        g_modes = block.g_modes
+        remap = self.g_remapped.get(value)  # (empty without REMAP= lines)
+        if remap is not None:
+            if g_modes[remap.modal_group] != -1:
+                raise InterpError("Two g codes used from same modal group")
+            g_modes[remap.modal_group] = value
+            return counter
         mode = GEES.get(value, -1)
         if mode == -1:
             raise InterpError("Unknown g code used")
-        g_modes = block.g_modes
         if value == G_80 and g_modes[mode] != -1:
             return counter
         if g_modes[mode] != G_80 and g_modes[mode] != -1:
@@ -381,6 +388,13 @@ class ReaderMixin:
         value, counter = self.read_integer_value(line, counter + 1)
         if value < 0:
             raise InterpError("Negative m code used")
+        remap = self.m_remapped.get(value)  # (empty without REMAP= lines)
+        if remap is not None:
+            if block.m_modes[remap.modal_group] != -1:
+                raise InterpError("Two m codes used from same modal group")
+            block.m_modes[remap.modal_group] = value
+            block.m_count += 1
+            return counter
         if value > 199:
             raise InterpError(f"M-code greater than 199: M{value}")
         mode = EMS.get(value, -1)
@@ -538,7 +552,7 @@ class ReaderMixin:
             if self.skipping_o:
                 block.o_type = O_none
                 return counter
-            block.call_type = CT_NGC_OWORD_SUB
+            block.call_type = self.call_type_of(block.o_name)  # NGC or Python (PY-007)
             params = []
             while counter < length and line[counter] in "[(":
                 if line[counter] == "(":

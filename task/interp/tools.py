@@ -32,6 +32,15 @@ class ToolsMixin:
             raise InterpError(f"Requested tool {toolno} not found in the tool table")
         return idx
 
+    def find_tool_pocket(self, toolno: int) -> tuple[int, int]:
+        """(status, pocket number in the tool table) of ``toolno`` (Python's
+        find_tool_pocket): INTERP_ERROR and pocket 0 when the table has no such tool."""
+        idx = self.canon.find_tool_index(toolno)
+        if idx == -1:
+            self.saved_error = f"Requested tool {toolno} not found in the tool table"
+            return 5, 0  # INTERP_ERROR
+        return 0, self.tool_table[idx].pocketno
+
     def convert_tool_select(self, block: Block) -> None:
         idx = self.find_tool_index(block.t_number)
         self.canon.SELECT_TOOL(block.t_number)
@@ -191,9 +200,9 @@ class ToolsMixin:
         spindle = self.tool_table[0]
         pars = self.parameters
         if self.random_toolchanger:
-            pars[5400] = spindle.toolno if spindle.toolno >= 0 else -1
+            pars[5400] = float(spindle.toolno if spindle.toolno >= 0 else -1)
         else:
-            pars[5400] = spindle.toolno if spindle.toolno > 0 else 0
+            pars[5400] = float(spindle.toolno if spindle.toolno > 0 else 0)
         self._set_tool_params_from(spindle)
         if not self.random_toolchanger and idx == self.current_pocket:
             canon.SET_TOOL_TABLE_ENTRY(
@@ -219,7 +228,7 @@ class ToolsMixin:
         if not self.random_toolchanger and spindle.toolno <= 0:
             self.default_tool_parameters()
             return
-        self.parameters[5400] = spindle.toolno
+        self.parameters[5400] = float(spindle.toolno)
         self._set_tool_params_from(spindle)
 
     def default_tool_parameters(self) -> None:
@@ -228,7 +237,7 @@ class ToolsMixin:
     def init_tool_parameters(self) -> None:
         if self.random_toolchanger:
             spindle = self.tool_table[0]
-            self.parameters[5400] = spindle.toolno
+            self.parameters[5400] = float(spindle.toolno)
             self._set_tool_params_from(spindle)
         elif self.tool_table[0].toolno == -1:
             self.default_tool_parameters()

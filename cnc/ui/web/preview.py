@@ -152,4 +152,5 @@ def preview(
             error = {"line": interp.sequence_number, "message": exc.message}
         finally:
             interp.close()
+            interp.release_python()  # (the INI's [PYTHON] plug-in, for its remaps)
     return {"points": canon.points, "error": error, "is_truncated": is_truncated}

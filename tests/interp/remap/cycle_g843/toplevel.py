@@ -1,0 +1,5 @@
+import remap
+
+
+def __init__(self):
+    remap.init_stdglue(self)

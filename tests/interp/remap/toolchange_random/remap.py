@@ -1,0 +1,1 @@
+from stdglue import *
