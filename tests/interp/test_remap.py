@@ -384,8 +384,9 @@ def test_debug_flags_trace_remaps_and_python_calls(in_folder) -> None:
         "REMAP=M430 modalgroup=10 python=body",
         "def body(self, **w):\n    return 0\n",
     )
-    with open(in_folder / "test.ini", "a") as ini:
-        ini.write("[EMC]\nDEBUG = 0x0000C000\n[RS274NGC]\nLOG_LEVEL = 2\n")
+    ini_path = in_folder / "test.ini"  # (a second [RS274NGC] would not be read, as LinuxCNC)
+    text = ini_path.read_text().replace("[RS274NGC]\n", "[RS274NGC]\nLOG_LEVEL = 2\n", 1)
+    ini_path.write_text(text + "[EMC]\nDEBUG = 0x0000C000\n")
     from cnc.ini import IniFile
 
     interp.ini = IniFile.load(in_folder / "test.ini")
