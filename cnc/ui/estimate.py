@@ -92,6 +92,14 @@ def time_at(reached: np.ndarray, line: int) -> float:
     return float(reached[min(max(line, 0), len(reached) - 1)])
 
 
+def line_span(reached: np.ndarray, line: int) -> tuple[float, float]:
+    """When the machine reaches ``line`` and when it reaches the next line that moves:
+    the time the line takes (both equal for the last one)."""
+    start = time_at(reached, line)
+    following = int(np.searchsorted(reached, start, side="right"))
+    return start, float(reached[following]) if following < len(reached) else start
+
+
 def canon_setup(machine: MachineSetup) -> CanonSetup:
     """The canon's view of the machine, as task builds it from the same INI."""
     axes = machine.axes
