@@ -21,6 +21,7 @@ import contextlib
 import json
 import sys
 import time
+import traceback
 from collections.abc import Awaitable, Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -155,9 +156,12 @@ class Hub:
         period = self.settings.cycle_time_s
         due = loop.time()
         while True:
-            for message in self.poll():
-                await self.broadcast(message)
-            await self._follow_program()
+            try:
+                for message in self.poll():
+                    await self.broadcast(message)
+                await self._follow_program()
+            except Exception:  # a bug must not end the status: said, and on with it
+                traceback.print_exc(file=sys.stderr)
             due = max(due + period, loop.time())
             await asyncio.sleep(due - loop.time())
 
@@ -169,7 +173,8 @@ class Hub:
         file = self.status.get("file") or ""
         if self.jobs.needs_analysis(file):
             await self.jobs.analyse(file, self._position)
-        state = self.jobs.poll()
+        # (in a worker thread: a finished estimate of a long program is megabytes to load)
+        state = await asyncio.get_running_loop().run_in_executor(self.executor, self.jobs.poll)
         if state is not None:
             await self.broadcast({"type": "program", **self.program_state(state)})
 

@@ -289,7 +289,8 @@ class ProgramJobs:
         self._processes.discard(process)
 
     def poll(self) -> dict[str, Any] | None:
-        """The current program's state if it changed since the last poll."""
+        """The current program's state if it changed since the last poll (reads files:
+        call it from a worker thread)."""
         current = self.current
         if current is None:
             return None

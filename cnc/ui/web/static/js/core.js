@@ -96,6 +96,12 @@ export function el(tag, props = {}, ...children) {
   return element;
 }
 
+// Change a text only when it differs: an unchanged page costs the browser no layout.
+export function setText(element, text) {
+  const value = String(text);
+  if (element.textContent !== value) element.textContent = value;
+}
+
 // Whether the operator is typing (keys then belong to the field, not to jogging).
 export function isTyping() {
   const active = document.activeElement;

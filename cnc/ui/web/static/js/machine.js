@@ -8,8 +8,8 @@
 // heavy lifting (reading a program, its toolpath) is done by a worker thread.
 
 import {
-  $, el, emit, fixed, fromShown, isTyping, length, on, parseDecimal, setShownUnits, shownUnits,
-  state, toShown,
+  $, el, emit, fixed, fromShown, isTyping, length, on, parseDecimal, setShownUnits, setText,
+  shownUnits, state, toShown,
 } from "./core.js";
 import { connect, send, sendQuietly } from "./link.js";
 import { askNumber, closeModal } from "./modal.js";
@@ -85,9 +85,9 @@ export function executingLine(s) {
 function showState() {
   const s = state.status;
   const [word, detail, kind] = machineState(s);
-  $("state").textContent = word;
+  setText($("state"), word);
   $("state").dataset.kind = kind;
-  $("state-detail").textContent = detail;
+  setText($("state-detail"), detail);
   $("state-detail").title = detail;
   const isOffline = kind === "offline";
   document.body.classList.toggle("offline", isOffline);
@@ -95,10 +95,10 @@ function showState() {
     "The controller is not running." : "The web server does not answer.";
   document.body.classList.toggle("is-estop", !isOffline && Boolean(s.is_estop));
   $("estop-banner").hidden = isOffline || !s.is_estop;
-  $("estop").textContent = !isOffline && s.is_estop ? "E-STOP ACTIVE" : "E-STOP";
+  setText($("estop"), !isOffline && s.is_estop ? "E-STOP ACTIVE" : "E-STOP");
   $("estop").title = s.is_estop ? "E-stop is active: press to reset (F1)" : "E-stop (F1)";
   $("power").classList.toggle("on", !isOffline && s.task_state === "ON");
-  $("power").textContent = !isOffline && s.task_state === "ON" ? "Machine ON" : "Machine OFF";
+  setText($("power"), !isOffline && s.task_state === "ON" ? "Machine ON" : "Machine OFF");
 }
 
 // ------------------------------------------------------------------ DRO
@@ -141,9 +141,10 @@ function showDro(s) {
   $("dro-joints").classList.toggle("on", isJoints);
   labels.forEach((_, index) => {
     const row = rows[index];
-    row.querySelector(".work").textContent = length(isJoints ? s.joint_position[index] : s.work[index]);
-    row.querySelector(".machine").textContent = isJoints ? "" : length(s.machine[index]);
-    row.querySelector(".dtg").textContent = isJoints ? "" : length(s.dtg[index]);
+    const cells = row.cells;
+    setText(cells[1], length(isJoints ? s.joint_position[index] : s.work[index]));
+    setText(cells[2], isJoints ? "" : length(s.machine[index]));
+    setText(cells[3], isJoints ? "" : length(s.dtg[index]));
     row.classList.toggle("is-homed", Boolean(homed[index]));
     row.classList.toggle("is-homing", Boolean(s.homing && s.homing[index]));
   });
@@ -164,17 +165,17 @@ on("units", () => {
 // tell them apart.
 function showMachineNow(s) {
   const direction = { 1: "FWD", "-1": "REV" }[s.spindle_direction];
-  $("now-spindle").textContent = direction ? `S ${fixed(s.spindle_speed, 0)} rpm ${direction}` : "spindle off";
+  setText($("now-spindle"), direction ? `S ${fixed(s.spindle_speed, 0)} rpm ${direction}` : "spindle off");
   const coolant = [s.is_flood ? "flood" : null, s.is_mist ? "mist" : null].filter(Boolean);
-  $("now-coolant").textContent = coolant.length ? `${coolant.join(" + ")} on` : "coolant off";
+  setText($("now-coolant"), coolant.length ? `${coolant.join(" + ")} on` : "coolant off");
   const units = shownUnits() === "inch" ? "in/min" : "mm/min";
-  $("now-velocity").textContent = `${fixed(toShown(s.velocity), shownUnits() === "inch" ? 2 : 0)} ${units}`;
-  $("now-tool").textContent = `T${s.tool ?? "—"}`;
-  $("spindle-state").textContent = direction ? `${direction} ${fixed(s.spindle_speed, 0)} rpm` : "OFF";
+  setText($("now-velocity"), `${fixed(toShown(s.velocity), shownUnits() === "inch" ? 2 : 0)} ${units}`);
+  setText($("now-tool"), `T${s.tool ?? "—"}`);
+  setText($("spindle-state"), direction ? `${direction} ${fixed(s.spindle_speed, 0)} rpm` : "OFF");
   $("spindle-state").classList.toggle("on", Boolean(direction));
-  $("gcodes").textContent = s.gcodes || "—";
-  $("mcodes").textContent = s.mcodes || "";
-  $("modal-fs").textContent = `F${fixed(s.feed, 1)} S${fixed(s.speed, 0)}`;
+  setText($("gcodes"), s.gcodes || "—");
+  setText($("mcodes"), s.mcodes || "");
+  setText($("modal-fs"), `F${fixed(s.feed, 1)} S${fixed(s.speed, 0)}`);
 }
 
 
@@ -302,8 +303,8 @@ document.querySelectorAll("[data-reset]").forEach((button) => {
 function showOverride(id, value) {
   const slider = $(id);
   if (document.activeElement === slider || value === null || value === undefined) return;
-  slider.value = value;
-  $(`${id}-value`).textContent = `${Math.round(value)}%`;
+  if (Number(slider.value) !== value) slider.value = value;
+  setText($(`${id}-value`), `${Math.round(value)}%`);
 }
 
 // ------------------------------------------------------------------ MDI

@@ -3,24 +3,25 @@
 //
 // The listing is virtual: only the lines in view exist in the page, decoded from the
 // program's bytes when they come into view, so a program of millions of lines loads and
-// scrolls as fast as a short one. Program text and toolpath are fetched by a worker
-// thread (loader-worker.js) for the open program (the server's "program" messages name
-// it by number: a newer program makes the page drop whatever is still coming of an older
-// one, so a listing never shows another program's lines).
+// scrolls as fast as a short one. Program text and toolpath are fetched, and the preview
+// drawn, by a worker thread (program-worker.js) for the open program (the server's
+// "program" messages name it by number: a newer program makes the page drop whatever is
+// still coming of an older one, so a listing never shows another program's lines).
 
-import { $, duration, el, fetchJson, on, state, withToken } from "./core.js";
+import { $, duration, el, fetchJson, on, setText, state, withToken } from "./core.js";
 import { send } from "./link.js";
 import { executingLine } from "./machine.js";
 import { notice } from "./notices.js";
-import { CAMERAS, Preview } from "./preview.js";
+import { CAMERAS } from "./camera.js";
+import { Preview } from "./preview.js";
 
 const ROW_PX = 20;  // the height of a listing line (style.css: .listing-row)
 const MAX_SPACE_PX = 8_000_000;  // browsers cap an element's height; more lines: scaled
 const FOLLOW_PAUSE_MS = 4000;  // after the operator scrolls, the listing stops following
 const decoder = new TextDecoder("utf-8");
 
-const loader = new Worker("/static/js/loader-worker.js");
-const preview = new Preview($("preview"));
+const worker = new Worker("/static/js/program-worker.js", { type: "module" });
+const preview = new Preview($("preview"), worker);
 let number = null;  // the open program's analysis number
 let text = null;  // {bytes: Uint8Array, starts: Uint32Array, count}
 let selected = 0;
@@ -39,13 +40,12 @@ on("program", (message) => {
     drawListing();
     $("program-file").replaceChildren(el("bdi", { textContent: message.file || "No program open" }));
     $("program-file").title = message.file || "";
-    loader.postMessage({ type: "program", number, url: withToken(`/api/program/text?number=${number}`) });
+    worker.postMessage({ type: "program", number,
+      textUrl: withToken(`/api/program/text?number=${number}`),
+      previewUrl: withToken(`/api/preview/data?number=${number}`) });
     if (message.name_in_prefix) selectInList(message.name_in_prefix);
   }
-  if (message.preview_points > preview.count) {
-    loader.postMessage({ type: "preview", number, points: message.preview_points,
-      url: withToken(`/api/preview/data?number=${number}`) });
-  }
+  worker.postMessage({ type: "points", number, points: message.preview_points });
   const error = message.preview_error || (message.failure ? { line: 0, message: message.failure } : null);
   errorLine = error ? error.line : 0;
   errorText = error ? error.message : "";
@@ -60,18 +60,16 @@ on("program", (message) => {
 
 function fileName(path) { return (path || "").split("/").pop(); }
 
-loader.onmessage = (event) => {
+worker.onmessage = (event) => {
   const message = event.data;
   if (message.number !== number) return;
   if (message.type === "text") {
     const starts = new Uint32Array(message.starts);
     text = { bytes: new Uint8Array(message.bytes), starts, count: starts.length - 1 };
     $("listing").dataset.lines = text.count;
-    drawListing();
     followLine(true);
-  } else if (message.type === "chunk") {
-    preview.append(message.first, message.data, message.bounds);
-    if (!preview.isMovedByOperator) preview.fit();  // the whole toolpath in view, as it grows
+  } else if (message.type === "preview") {
+    preview.drawn(message);
   } else if (message.type === "failed") {
     notice("error", `${message.what}: ${message.message}`);
   }
@@ -129,6 +127,7 @@ function scrollTopFor(firstLine) {
 }
 
 let isDrawPending = false;
+let follow = null;  // null, or whether to bring the executing line into view by force
 function drawListing() {
   if (isDrawPending) return;
   isDrawPending = true;
@@ -136,8 +135,14 @@ function drawListing() {
 }
 
 function paintListing() {
-  space.style.height = `${spaceHeight()}px`;
+  const height = `${spaceHeight()}px`;
+  if (space.style.height !== height) space.style.height = height;
   if (!text) { rows.replaceChildren(); return; }
+  if (follow !== null) {  // here, in the frame: reading the layout costs nothing more
+    const line = executingLine(state.status);
+    if (line) scrollToLine(line, follow);
+    follow = null;
+  }
   const first = firstLineAt(listing.scrollTop);
   const firstIndex = Math.floor(first);
   const count = Math.min(Math.ceil(listing.clientHeight / ROW_PX) + 2, text.count - firstIndex);
@@ -150,14 +155,18 @@ function paintListing() {
   for (let i = 0; i < count; i++) {
     const line = firstIndex + i + 1;
     const row = rows.children[i];
-    row.dataset.line = line;
-    row.children[0].textContent = line;
-    row.children[1].textContent = lineText(line) || " ";
-    row.className = "listing-row" +
+    if (row.dataset.line !== String(line)) {
+      row.dataset.line = line;
+      setText(row.children[0], line);
+      setText(row.children[1], lineText(line) || " ");
+    }
+    const className = "listing-row" +
       (line === current ? " current" : "") +
       (line === selected ? " selected" : "") +
       (line === errorLine ? " error" : "");
-    row.title = line === errorLine ? errorText : "";
+    if (row.className !== className) row.className = className;
+    const title = line === errorLine ? errorText : "";
+    if (row.title !== title) row.title = title;
   }
 }
 
@@ -172,7 +181,7 @@ rows.addEventListener("click", (event) => {
   const row = event.target.closest(".listing-row");
   if (!row) return;
   selected = Number(row.dataset.line);
-  preview.setLines(preview.current, selected);
+  preview.setLines(preview.state.current, selected);
   drawListing();
 });
 rows.addEventListener("dblclick", (event) => {
@@ -193,9 +202,11 @@ function scrollToLine(line, isForced = false) {
   }
 }
 
+// Bring the executing line into view at the next frame (forced: even if the operator
+// scrolled away a moment ago).
 function followLine(isForced = false) {
-  const line = executingLine(state.status);
-  if (line) scrollToLine(line, isForced);
+  follow = follow || isForced;
+  drawListing();
 }
 
 // ------------------------------------------------------------------ status
@@ -209,7 +220,6 @@ on("status", (changes) => {
   if (line !== lastLine) {
     lastLine = line;
     followLine();
-    drawListing();
   }
   showProgress(s.job);
   $("optional-stop").classList.toggle("on", Boolean(s.is_optional_stop));
@@ -250,7 +260,7 @@ function showProgress(job) {
     `${duration(job.elapsed_s)} elapsed`];
   if (job.remaining_s !== null) parts.push(`about ${duration(job.remaining_s)} left`);
   if (job.estimate_s !== null) parts.push(`estimate ${duration(job.estimate_s)}`);
-  $("progress-text").textContent = parts.join(" · ");
+  setText($("progress-text"), parts.join(" · "));
 }
 
 // ------------------------------------------------------------------ files and run
@@ -306,10 +316,9 @@ $("program-upload").onchange = async (event) => {
 function setSplit(choice) {
   $("program-split").className = `program-split ${choice}`;
   for (const button of $("split").children) button.classList.toggle("on", button.dataset.split === choice);
-  preview.isVisible = choice !== "listing";
   localStorage.setItem("cnc.split", choice);
   drawListing();
-  preview.draw();
+  preview.setVisible(choice !== "listing");
 }
 for (const button of $("split").children) button.onclick = () => setSplit(button.dataset.split);
 document.querySelectorAll("[data-camera]").forEach((button) => {
@@ -323,7 +332,7 @@ on("config", (config) => {
   loadFiles();
   if (config.is_lathe) { CAMERAS.top = CAMERAS.lathe; preview.setCamera("lathe"); }
 });
-on("theme", () => preview.draw());  // its colours come from the theme
+on("theme", () => preview.sendColors());  // its colours come from the theme
 setSplit(localStorage.getItem("cnc.split") || "both");
 
 export function openProgramName() { return state.program ? state.program.name_in_prefix : null; }

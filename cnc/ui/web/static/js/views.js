@@ -338,11 +338,12 @@ loaders.editor = () => {
 };
 
 // ------------------------------------------------------------------ history
+const started = new Intl.DateTimeFormat(undefined, { dateStyle: "short", timeStyle: "medium" });
 on("jobs", (message) => {
   $("jobs").tBodies[0].replaceChildren(...message.jobs.map((job) => {
     const difference = job.estimate_s ? `${(((job.run_s - job.estimate_s) / job.estimate_s) * 100).toFixed(0)} %` : "—";
     return el("tr", { className: job.result },
-      el("td", { textContent: new Date(job.started * 1000).toLocaleString() }),
+      el("td", { textContent: started.format(new Date(job.started * 1000)) }),
       el("td", { className: "comment", textContent: job.file.split("/").pop(), title: job.file }),
       el("td", { textContent: job.result }),
       el("td", { textContent: duration(job.run_s) }),

@@ -1,32 +1,48 @@
-// A worker thread that fetches the open program for the page, so that the page's own
-// thread (which must answer STOP at once) never splits megabytes of text or reads
-// millions of toolpath records.
+// The worker thread behind the program view: it fetches the open program's text and
+// toolpath and draws the preview (renderer.js, on the canvas the page handed over), so
+// that the page's own thread, which must answer STOP at once, never splits megabytes of
+// text, reads millions of toolpath records, or waits for the graphics card.
 //
-// page -> worker: {type: "program", number, url}: fetch the text, find where each line
-//   starts; {type: "preview", number, url, points}: fetch the toolpath records from the
-//   last one fetched up to ``points`` (what the server has so far).
-// worker -> page: {type: "text", number, bytes, starts} (transferred, not copied: the page
-//   decodes only the lines it shows); {type: "chunk", number, first, data, bounds} for each
-//   piece of toolpath (16-byte records, cnc/ui/web/preview.py), with the bounds so far;
-//   {type: "failed", number, what, message}.
+// page -> worker:
+//   {type: "canvas", canvas}                      the preview's OffscreenCanvas (once)
+//   {type: "program", number, textUrl, previewUrl} a program to show (drops any older one)
+//   {type: "points", number, points}               the server has this much toolpath
+//   {type: "set", ...}                             view, size, colours, lines, tool ...
+// worker -> page:
+//   {type: "text", number, bytes, starts}          the text and where each line starts
+//                                                  (transferred: the page decodes only
+//                                                  the lines it shows)
+//   {type: "preview", number, points, drawn, renderer, bounds}
+//   {type: "failed", number, what, message}
+
+import { Renderer } from "./renderer.js";
 
 const RECORD = 16;
-let number = null;  // the program being loaded; anything older is dropped
+let renderer = null;
+let number = null;  // the program shown; anything older is dropped
 let fetched = 0;  // toolpath records fetched for it
-let isFetching = false;
 let wanted = 0;
+let isFetching = false;
 let previewUrl = "";
 let bounds = null;
 
+function report(drawing) {
+  self.postMessage({ type: "preview", number, bounds, ...drawing });
+}
+
 self.onmessage = (event) => {
   const message = event.data;
-  if (message.number !== number) {
+  if (message.type === "canvas") {
+    renderer = new Renderer(message.canvas, report);
+  } else if (message.type === "set") {
+    if (renderer) renderer.set(message.changes);
+  } else if (message.type === "program") {
     number = message.number;
     fetched = 0; wanted = 0; bounds = null; isFetching = false;
-  }
-  if (message.type === "program") loadText(message);
-  else if (message.type === "preview") {
-    previewUrl = message.url;
+    previewUrl = message.previewUrl;
+    if (renderer) renderer.reset();
+    loadText(message);
+  } else if (message.type === "points" && message.number === number) {
     wanted = Math.max(wanted, message.points);
     if (!isFetching) loadPreview(number);
   }
@@ -34,7 +50,7 @@ self.onmessage = (event) => {
 
 async function loadText(message) {
   try {
-    const response = await fetch(message.url);
+    const response = await fetch(message.textUrl);
     if (!response.ok) throw new Error(await response.text());
     const bytes = new Uint8Array(await response.arrayBuffer());
     if (message.number !== number) return;
@@ -46,17 +62,16 @@ async function loadText(message) {
   }
 }
 
-// Where each line starts (a last line without a newline counts; an empty file has none).
+// Where each line starts, and the end (a last line without a newline counts).
 function lineStarts(bytes) {
   let count = 0;
   for (let i = 0; i < bytes.length; i++) if (bytes[i] === 10) count++;
   const hasTail = bytes.length > 0 && bytes[bytes.length - 1] !== 10;
-  const starts = new Uint32Array(count + (hasTail ? 1 : 0) + 1);  // + the end
+  const starts = new Uint32Array(count + (hasTail ? 1 : 0) + 1);
   let line = 1;
-  starts[0] = 0;
   for (let i = 0; i < bytes.length; i++) if (bytes[i] === 10) starts[line++] = i + 1;
   if (hasTail) starts[line++] = bytes.length;
-  return starts.subarray(0, line).slice();  // line - 1 lines, and the end
+  return starts.subarray(0, line).slice();
 }
 
 async function loadPreview(forNumber) {
@@ -67,11 +82,10 @@ async function loadPreview(forNumber) {
       if (forNumber !== number) return;
       if (!response.ok) throw new Error(await response.text());
       const data = await response.arrayBuffer();
-      if (data.byteLength === 0) break;
-      const first = fetched;
+      if (forNumber !== number || data.byteLength === 0) break;
       fetched += data.byteLength / RECORD;
       grow(new DataView(data));
-      self.postMessage({ type: "chunk", number: forNumber, first, data, bounds }, [data]);
+      if (renderer) renderer.append(data);
     }
   } catch (error) {
     self.postMessage({ type: "failed", number: forNumber, what: "preview", message: String(error) });
