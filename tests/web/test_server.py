@@ -20,7 +20,10 @@ pytestmark = pytest.mark.asyncio
 
 
 def without_serial(command: dict) -> tuple[str, dict]:
-    fields = {k: v for k, v in command["fields"].items() if k not in ("serial_number", "tag")}
+    """A command's type and fields, without those the API fills in itself (serial, tag,
+    a continuous jog's lease)."""
+    hidden = ("serial_number", "tag", "lease_slot", "lease_pid")
+    fields = {k: v for k, v in command["fields"].items() if k not in hidden}
     return command["type"], fields
 
 
@@ -198,7 +201,7 @@ async def test_the_page_and_its_assets_are_served(web) -> None:
     text = await page.text()
     assert page.status == 200 and "/static/js/app.js" in text
     scripts = sorted(p.name for p in (STATIC / "js").glob("*.js"))
-    assert "app.js" in scripts and "loader-worker.js" in scripts
+    assert "app.js" in scripts and "program-worker.js" in scripts
     for asset in ["style.css", *(f"js/{name}" for name in scripts)]:
         response = await client.get(f"/static/{asset}")
         assert response.status == 200, asset
