@@ -116,7 +116,7 @@ def test_the_page_runs_a_shop_day_on_a_real_machine(
     a_continuous_jog_lasts_while_the_key_is_held(page, machine)
     spindle_limits_and_jog_speed_come_from_the_ini(page)
     overrides_reset_to_100_and_there_is_one_stop(page)
-    a_program_runs_with_progress_and_an_estimate(page, shots)
+    a_program_runs_with_progress_and_an_estimate(page, shots, machine)
     the_machines_spindle_and_coolant_beside_the_modal_state(page, machine, shots)
     an_m0_stop_shows_its_line(page, shots)
     a_load_error_marks_its_line(page)
@@ -227,7 +227,9 @@ def overrides_reset_to_100_and_there_is_one_stop(page) -> None:  # type: ignore[
     assert stops.all_inner_texts() == ["STOP"]
 
 
-def a_program_runs_with_progress_and_an_estimate(page, shots: Path) -> None:  # type: ignore[no-untyped-def]
+def a_program_runs_with_progress_and_an_estimate(  # type: ignore[no-untyped-def]
+    page, shots: Path, machine: Machine
+) -> None:
     mdi(page, "G0 X0 Y0")
     page.select_option("#program-list", "part.ngc")
     page.click("#program-open")
@@ -244,6 +246,12 @@ def a_program_runs_with_progress_and_an_estimate(page, shots: Path) -> None:  # 
     page.click('#views [data-view="history"]')
     expect(page.locator("#jobs tbody tr").first).to_contain_text("finished")
     page.click('#views [data-view="run"]')
+    long_name = "a-program-with-a-name-far-longer-than-the-panel-is-wide-for-the-run-row.ngc"
+    (machine.folder / long_name).write_text("G0 X0\nM2\n")
+    page.click("#program-refresh")
+    page.select_option("#program-list", long_name)
+    page.click("#program-open")
+    expect(page.locator("#program-file")).to_contain_text(long_name)
     assert page.locator(".run-row").bounding_box() == row  # the same with any file name
 
 
@@ -278,7 +286,7 @@ def an_m0_stop_shows_its_line(page, shots: Path) -> None:  # type: ignore[no-unt
     expect(page.locator("#listing")).to_have_attribute("data-lines", "8")
     page.click("#run")
     expect(page.locator("#state")).to_have_text("STOPPED")
-    expect(page.locator("#state-detail")).to_contain_text("M0/M1) at line 5")
+    expect(page.locator("#state-detail")).to_contain_text("at line 5 (M0, M1 or a step)")
     expect(page.locator(".listing-row.current .number")).to_have_text("5")  # the M0 line
     page.screenshot(path=str(shots / "state-m0.png"))
     page.click("#resume")

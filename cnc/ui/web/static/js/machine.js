@@ -64,8 +64,8 @@ export function machineState(s) {
   const isIdle = s.interp_state === "IDLE";
   if (s.task_mode === "AUTO" && !isIdle) {
     const line = executingLine(s);
-    if (s.is_program_stop) {
-      return ["STOPPED", `program stop (M0/M1) at line ${s.current_line}: Resume to continue`, "paused"];
+    if (s.is_program_stop) {  // the program paused itself: M0, M1, or the end of a step
+      return ["STOPPED", `at line ${s.current_line} (M0, M1 or a step): Resume to continue`, "paused"];
     }
     if (s.is_paused) return ["PAUSED", `at line ${line}: Resume to continue`, "paused"];
     return ["RUNNING", `line ${line}`, "running"];
@@ -75,8 +75,8 @@ export function machineState(s) {
   return ["READY", s.task_mode === "MANUAL" ? "manual" : s.task_mode.toLowerCase(), "ready"];
 }
 
-// The line to highlight: motion's (the interpreter reads ahead), except at a program
-// stop (M0, M1), where motion is at rest and the stop's own line is the one reached.
+// The line to highlight: motion's (the interpreter reads ahead), except where the program
+// paused itself (M0, M1, a step's end): motion is at rest and that line is the one reached.
 export function executingLine(s) {
   if (s.is_program_stop) return s.current_line || 0;
   return s.motion_line || s.current_line || 0;
