@@ -1,9 +1,14 @@
 #!/usr/bin/env python3
-"""Web UI benchmark: status-to-browser latency and server CPU with 1, 5, 20 clients, and
-HAL-pin-to-dialog latency (JSON).
+"""Web UI benchmark (JSON): status-to-browser latency and server CPU with 1, 5, 20
+clients, HAL-pin-to-dialog latency; on a real machine, program listing and preview load
+times for 20k, 200k and 1M lines, STOP-to-rest with the preview on screen during a run,
+and the run time estimate's error on the shared benchmark programs.
 
-    python scripts/bench/ui_bench.py [--seconds S] [--clients 1,5,20] [--cycle-ms MS]
-                                     [--dialogs N]
+    python scripts/bench/ui_bench.py [--parts status,load,stop,estimate] [--seconds S]
+        [--clients 1,5,20] [--cycle-ms MS] [--dialogs N] [--sizes 20000,200000,1000000]
+        [--stops N] [--programs circle_g64 ...]
+
+Part "status" (the first part of this text is about it):
 
 Creates the controller's buffers (configs/common/cnc.nml) in a private instance, starts
 ``cnc ui web`` (a real process) on a free loopback port, and connects N websocket clients.
@@ -17,13 +22,35 @@ Dialogs: a HAL of the private instance, a [DISPLAY] MESSAGE_* okdialog on pin
 web.messages.bench, driven by a component of this process; latency = rising edge written ->
 "dialog" message at one client (again bounded below by the server's poll cycle), N times,
 answered each time. Keys: dialog_ms_median, dialog_ms_max.
+
+The other parts start our machine (``cnc run --headless`` on scripts/bench/axis_mm.ini,
+LinuxCNC's sim limits, as motion_bench.py) and the server on it; "load" and "stop" drive
+the page in Debian's chromium through Playwright (skipped without them):
+
+- "load", per program size (a Lissajous of short feeds): ``listing_s`` from pressing
+  Open to every line known to the listing; ``preview_s`` to every toolpath point on the
+  graphics card (the preview's own interpreter run included); ``longest_task_ms``, the
+  longest stretch the page's thread was busy meanwhile (PerformanceObserver "longtask",
+  over 50 ms only: 0 means none); while turning the view by mouse for 2 s, the frames the
+  page drew (``turn_fps``) and the longest gap between two (``turn_gap_ms_max``).
+- "stop": the 200,000-line program runs with listing and preview on screen; after 1 to 3
+  s, STOP is pressed (mouse down on it, as a hand would); ``rest_ms``: until the machine is
+  at rest (stat.current_vel 0, polled every 0.5 ms), N times: median and max, beside
+  ``braking_ms``, what braking from the speed of the moment takes at the machine's
+  acceleration (the rest is the command's way there).
+- "estimate", per shared program (../shared/reference/programs): the estimate
+  (cnc/ui/estimate.py, from X0 Y0 Z10 as the runner starts) beside the run time on our
+  machine (program_runner.run_program: RUN to idle and in position), and the error in
+  percent; ``compute_s`` is what the estimate cost.
 """
 
 from __future__ import annotations
 
 import argparse
 import asyncio
+import itertools
 import json
+import math
 import os
 import random
 import signal
@@ -36,10 +63,13 @@ import time
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[2]
+HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(REPO))
+sys.path.insert(0, str(HERE))
 os.environ["CNC_INSTANCE"] = f"uibench{os.getpid()}"
 
 import aiohttp  # noqa: E402
+from program_runner import machine_on_and_homed, run_program, wait_for  # noqa: E402
 
 from hal.api import HAL_BIT, HAL_OUT, component  # noqa: E402
 from hal.core import Hal  # noqa: E402
@@ -160,13 +190,7 @@ def wait_for_server(port: int, proc: subprocess.Popen[bytes]) -> None:
     raise SystemExit("the server did not start")
 
 
-def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--seconds", type=float, default=3.0, help="per client count")
-    parser.add_argument("--clients", default="1,5,20")
-    parser.add_argument("--cycle-ms", type=float, default=100.0, help="[DISPLAY]CYCLE_TIME")
-    parser.add_argument("--dialogs", type=int, default=20, help="message dialogs to time")
-    args = parser.parse_args()
+def status_part(args: argparse.Namespace) -> dict[str, object]:
     results: dict[str, object] = {"cycle_ms": args.cycle_ms}
     with tempfile.TemporaryDirectory() as folder:
         ini = Path(folder) / "bench.ini"
@@ -220,6 +244,251 @@ def main() -> int:
         finally:
             hal.close()
             remove_instance_objects(os.environ["CNC_INSTANCE"])
+    return results
+
+
+# ------------------------------------------------------------------ on a real machine
+CHROMIUM = Path("/usr/bin/chromium")
+CHROMIUM_ARGS = [
+    "--headless=new",
+    "--no-sandbox",
+    "--use-angle=swiftshader",
+    "--enable-unsafe-swiftshader",
+    "--disable-dev-shm-usage",
+    "--no-first-run",
+]
+PROGRAMS = (
+    next(
+        (folder for folder in (REPO.parent / "shared", Path("/work/shared")) if folder.is_dir()),
+        REPO.parent / "shared",
+    )
+    / "reference"
+    / "programs"
+)  # ../shared beside the checkout (a worktree: /work/shared)
+START = [0.0, 0.0, 10.0]  # program_runner's START_MDI
+WAIT_MS = 600_000
+LONGEST_TASK = """() => {
+  window.benchLongest = 0;
+  new PerformanceObserver((list) => {
+    for (const entry of list.getEntries()) {
+      window.benchLongest = Math.max(window.benchLongest, entry.duration);
+    }
+  }).observe({ type: "longtask" });
+}"""
+FRAMES = """(seconds) => new Promise((done) => {
+  const times = [];
+  const end = performance.now() + seconds * 1000;
+  const tick = (time) => {
+    times.push(time);
+    if (time < end) requestAnimationFrame(tick); else done(times);
+  };
+  requestAnimationFrame(tick);
+})"""
+
+
+def big_program(path: Path, lines: int) -> None:
+    """A Lissajous of ``lines`` short feeds at 3000 mm/min (as tests/web/test_browser.py)."""
+    out = ["G21 G90 G64 F3000", "G0 Z1", "G0 X0 Y9", "G1 Z-0.5 F600", "F3000"]
+    loops = max(lines // 2000, 1)
+    for n in range(lines):
+        t = n / lines * 2 * math.pi * loops
+        out.append(f"G1 X{40 * math.sin(3 * t):.4f} Y{30 * math.sin(2 * t + 0.3):.4f}")
+    path.write_text("\n".join([*out, "G0 Z5", "M2"]) + "\n")
+
+
+def open_program(page, name: str) -> float:  # type: ignore[no-untyped-def]
+    """Open ``name`` from the page; the seconds until its listing is whole."""
+    page.click("#program-refresh")  # the list as the folder is now
+    page.wait_for_selector(f'#program-list option[value="{name}"]', state="attached")
+    page.evaluate(LONGEST_TASK)
+    start = time.perf_counter()
+    page.select_option("#program-list", name)
+    page.click("#program-open")
+    page.wait_for_function(
+        f"document.getElementById('program-file').textContent.endsWith('{name}')"
+        " && Number(document.getElementById('listing').dataset.lines) > 0",
+        timeout=WAIT_MS, polling=20,
+    )  # fmt: skip
+    return time.perf_counter() - start
+
+
+def load_part(page, folder: Path, sizes: list[int]) -> dict[str, object]:  # type: ignore[no-untyped-def]
+    found: dict[str, object] = {}
+    for size in sizes:
+        name = f"lissajous_{size}.ngc"
+        big_program(folder / name, size)
+        start = time.perf_counter()
+        listing_s = open_program(page, name)
+        page.wait_for_function(
+            "(() => { const p = document.getElementById('preview').dataset;"
+            " return !document.getElementById('analysis').textContent.includes('reading')"
+            " && Number(p.points) > 0 && p.drawn === p.points; })()",
+            timeout=WAIT_MS, polling=50,
+        )  # fmt: skip
+        preview_s = time.perf_counter() - start
+        longest = page.evaluate("window.benchLongest")
+        box = page.locator("#preview").bounding_box()
+        page.mouse.move(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
+        page.mouse.down()
+        frames = page.evaluate_handle(FRAMES, 2.0)
+        for step in range(40):  # turn the view for about 2 s
+            page.mouse.move(box["x"] + box["width"] / 2 + 4 * (step % 20 - 10),
+                            box["y"] + box["height"] / 2, steps=4)  # fmt: skip
+        page.mouse.up()
+        times = frames.json_value()
+        gaps = [b - a for a, b in itertools.pairwise(times)]
+        found[str(size)] = {
+            "listing_s": round(listing_s, 2),
+            "preview_s": round(preview_s, 2),
+            "points": int(page.locator("#preview").get_attribute("data-points")),
+            "longest_task_ms": round(longest, 1),
+            "turn_fps": round(len(gaps) / max((times[-1] - times[0]) / 1000, 1e-9), 1),
+            "turn_gap_ms_max": round(max(gaps, default=0.0), 1),
+        }
+    return found
+
+
+def stop_part(page, folder: Path, count: int, max_acc: float) -> dict[str, object]:  # type: ignore[no-untyped-def]
+    import cnc
+
+    name = "lissajous_200000.ngc"
+    if not (folder / name).exists():
+        big_program(folder / name, 200_000)
+    open_program(page, name)
+    page.wait_for_function(
+        "(() => { const p = document.getElementById('preview').dataset;"
+        " return Number(p.points) > 0 && p.drawn === p.points; })()",
+        timeout=WAIT_MS, polling=50,
+    )  # fmt: skip
+    s = cnc.stat()
+    rests, brakings = [], []
+    for _ in range(count):
+        page.click("#run")
+        wait_for(s, lambda s: s.current_vel > 0, 60)
+        time.sleep(1 + 2 * random.random())
+        box = page.locator("#abort").bounding_box()
+        page.mouse.move(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
+        s.poll()
+        speed = s.current_vel
+        start = time.perf_counter()
+        page.mouse.down()
+        wait_for(s, lambda s: s.current_vel == 0, 30, 0.0005)
+        rests.append((time.perf_counter() - start) * 1000)
+        page.mouse.up()
+        brakings.append(speed / max_acc * 1000)
+        wait_for(s, lambda s: s.interp_state == cnc.INTERP_IDLE, 30)
+    return {
+        "preview_points": int(page.locator("#preview").get_attribute("data-points")),
+        "rest_ms_median": round(percentile(rests, 0.5), 1),
+        "rest_ms_max": round(max(rests), 1),
+        "braking_ms_median": round(percentile(brakings, 0.5), 1),
+        "runs": count,
+    }
+
+
+def estimate_part(folder: Path, names: list[str]) -> dict[str, object]:
+    import cnc
+    from cnc.ui.estimate import estimate
+
+    class NoRecorder:
+        def start(self) -> None: ...
+
+        def stop(self) -> None: ...
+
+    found: dict[str, object] = {}
+    for name in names:
+        program = PROGRAMS / f"{name}.ngc"
+        start = time.perf_counter()
+        guess = estimate(str(program), str(folder / "axis_mm.ini"), start=START)
+        compute_s = time.perf_counter() - start
+        run = run_program(cnc, str(program), NoRecorder(), timeout=600)
+        actual = run["cycle_s"]
+        found[name] = {
+            "estimate_s": round(guess.total_s, 3),
+            "actual_s": actual,
+            "error_percent": round((guess.total_s - actual) / actual * 100, 2),
+            "compute_s": round(compute_s, 2),
+            "is_ok": run["is_ok"],
+        }
+    return found
+
+
+def machine_parts(args: argparse.Namespace, parts: set[str]) -> dict[str, object]:
+    from motion_bench import our_machine
+
+    import cnc
+
+    results: dict[str, object] = {}
+    with tempfile.TemporaryDirectory() as temporary:
+        folder = Path(temporary)
+        with our_machine(folder, f"uibenchm{os.getpid()}") as env:
+            machine_on_and_homed(cnc)
+            if "estimate" in parts:
+                results["estimate"] = estimate_part(folder, args.programs)
+            browser_parts = parts & {"load", "stop"}
+            if not browser_parts:
+                return results
+            try:
+                from playwright.sync_api import sync_playwright
+            except ImportError:
+                return results | {"browser": "skipped: no playwright"}
+            if not CHROMIUM.exists():
+                return results | {"browser": f"skipped: no {CHROMIUM}"}
+            port = free_port()
+            server = subprocess.Popen(
+                [sys.executable, "-c", SERVER_MAIN, "web", "axis_mm.ini", "--port", str(port)],
+                cwd=folder, env=dict(env, PYTHONPATH=str(REPO)), stdout=subprocess.DEVNULL,
+                start_new_session=True,
+            )  # fmt: skip
+            try:
+                wait_for_server(port, server)
+                with sync_playwright() as playwright:
+                    browser = playwright.chromium.launch(
+                        executable_path=str(CHROMIUM), args=CHROMIUM_ARGS
+                    )
+                    page = browser.new_page(viewport={"width": 1280, "height": 800})
+                    page.set_default_timeout(WAIT_MS)
+                    page.goto(f"http://127.0.0.1:{port}/")
+                    page.wait_for_function(
+                        "document.getElementById('state').textContent === 'READY'"
+                    )
+                    results["renderer"] = page.locator("#preview").get_attribute("data-renderer")
+                    if "load" in parts:
+                        results["load"] = load_part(page, folder, args.sizes)
+                    if "stop" in parts:
+                        results["stop"] = stop_part(page, folder, args.stops, 508.0)
+                    browser.close()
+            finally:
+                server.send_signal(signal.SIGTERM)
+                try:
+                    server.wait(timeout=10)
+                except subprocess.TimeoutExpired:
+                    server.kill()
+    return results
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--parts", default="status,load,stop,estimate")
+    parser.add_argument("--seconds", type=float, default=3.0, help="per client count")
+    parser.add_argument("--clients", default="1,5,20")
+    parser.add_argument("--cycle-ms", type=float, default=100.0, help="[DISPLAY]CYCLE_TIME")
+    parser.add_argument("--dialogs", type=int, default=20, help="message dialogs to time")
+    parser.add_argument("--sizes", default="20000,200000,1000000", help="program lines")
+    parser.add_argument("--stops", type=int, default=5, help="STOP presses to time")
+    parser.add_argument(
+        "--programs", nargs="*",
+        default=sorted(path.stem for path in PROGRAMS.glob("*.ngc")),
+        help="shared benchmark programs for the estimate",
+    )  # fmt: skip
+    args = parser.parse_args()
+    args.sizes = [int(word) for word in args.sizes.split(",") if word]
+    parts = {word.strip() for word in args.parts.split(",")}
+    results: dict[str, object] = {}
+    if "status" in parts:
+        results["status"] = status_part(args)
+    if parts & {"load", "stop", "estimate"}:
+        results |= machine_parts(args, parts)
     print(json.dumps(results, indent=2))
     return 0
 

@@ -8,10 +8,11 @@ does: EMC_STAT with the command's serial in ``echo_serial_number`` and status EX
 DONE. An MDI command equal to the ``--fail`` text ends in ERROR (with an operator error on
 emcError, as task reports it); one equal to the ``--hang`` text stays EXEC forever. Operator
 messages (command.error_msg ...) are forwarded to emcError, as task forwards them, and
-EMC_TASK_SET_MODE changes ``task.mode``. With ``--machine`` it first publishes
-``machine_status()`` (an XYZ mm machine in ESTOP, manual mode, interpreter idle, at X12.5
-Y-3.25 Z40 with a G54 offset of X10), and EMC_TASK_SET_STATE changes ``task.state``, the
-E-stop flag and motion's enable, as the UI tests need.
+EMC_TASK_SET_MODE changes ``task.mode``, EMC_TASK_PLAN_OPEN ``task.file``. With
+``--machine`` it first publishes ``machine_status()`` (an XYZ mm machine in ESTOP, manual
+mode, interpreter idle, at X12.5 Y-3.25 Z40 with a G54 offset of X10), and
+EMC_TASK_SET_STATE changes ``task.state``, the E-stop flag and motion's enable, as the UI
+tests need.
 """
 
 from __future__ import annotations
@@ -89,6 +90,8 @@ def main() -> int:
                 errors.write(command)
             if isinstance(command, emc.EMC_TASK_SET_MODE):
                 status.task.mode = command.mode
+            if isinstance(command, emc.EMC_TASK_PLAN_OPEN):
+                status.task.file = command.file
             if args.machine and isinstance(command, emc.EMC_TASK_SET_STATE):
                 status.task.state = command.state
                 status.io.aux.estop = command.state == STATE_ESTOP

@@ -89,7 +89,16 @@ MESSAGE_TYPE = yesnodialog
 MESSAGE_PINNAME = door
 MESSAGE_ICON = WARNING
 """
-PART = "G21 G90\nG0 X1 Y2\nG3 X3 Y2 I1 F600\nM2\n"  # ends at X3 Y2
+# The spindle's range ([SPINDLE_0], LinuxCNC 2.9's keys), which the page keeps to
+SPINDLE = "\n[SPINDLE_0]\nMAX_FORWARD_VELOCITY = 6000\nMIN_FORWARD_VELOCITY = 0\n"
+PROGRAMS = {
+    "part.ngc": "G21 G90\nG0 X1 Y2\nG3 X3 Y2 I1 F600\nM2\n",  # ends at X3 Y2
+    # spindle and flood on, then a 12 s feed: the interpreter reads M5 M9 ahead of it
+    "cut.ngc": "G21 G90\nM3 S1000\nM8\nG1 X60 F300\nM5 M9\nG0 X0\nM2\n",
+    # an M0 on line 5: the page shows that line, not the move before it
+    "stop.ngc": "G21 G90\nG0 X0 Y0\nG1 X5 F600\nM3 S500\nM0\nG1 X0\nM5\nM2\n",
+    "bad.ngc": "G21 G90\nG0 X1\nG1 X2 F100 Q\nM2\n",  # an error on line 3
+}
 
 
 def free_port() -> int:
@@ -111,14 +120,29 @@ def wait_http(url: str, proc: subprocess.Popen[str], timeout: float = 30) -> Non
 
 
 @pytest.fixture
-def machine(procs: Processes, tmp_path: Path) -> Iterator[Machine]:
+def machine(procs: Processes, tmp_path: Path, request: pytest.FixtureRequest) -> Iterator[Machine]:
+    """The test mill with the programs above; with the [DISPLAY] message dialogs unless
+    parametrized (indirect) with False: a server with message pins owns a HAL component
+    of the machine, which the machine's shut-down stops (HAL's unload all, as LinuxCNC's)."""
     folder = tmp_path / "machine"
     shutil.copytree(MACHINE, folder)
     ini = folder / "mill.ini"
-    ini.write_text(ini.read_text().replace("[DISPLAY]\n", "[DISPLAY]\n" + MESSAGES, 1))
-    (folder / "part.ngc").write_text(PART)
+    messages = MESSAGES if getattr(request, "param", True) else ""
+    text = ini.read_text().replace("[DISPLAY]\n", "[DISPLAY]\n" + messages, 1) + SPINDLE
+    ini.write_text(text)
+    for name, program in PROGRAMS.items():
+        (folder / name).write_text(program)
     with launched(procs, folder) as found:
         yield found
+
+
+def start_server(procs: Processes, machine: Machine, port: int) -> subprocess.Popen[str]:
+    """``cnc ui web`` on the machine, as its own process, answering on ``port``."""
+    server = procs.python(
+        "-c", SERVER_MAIN, "web", "mill.ini", "--port", str(port), cwd=machine.folder
+    )
+    wait_http(f"http://127.0.0.1:{port}/", server)
+    return server
 
 
 @pytest.fixture
@@ -126,14 +150,15 @@ def page_url(machine: Machine, procs: Processes) -> Iterator[str]:
     """``cnc ui web`` on the machine, as its own process; its address. Stopped before the
     machine (it removes its HAL component then)."""
     port = free_port()
-    server = procs.python(
-        "-c", SERVER_MAIN, "web", "mill.ini", "--port", str(port), cwd=machine.folder
-    )
+    server = start_server(procs, machine, port)
     url = f"http://127.0.0.1:{port}/"
-    wait_http(url, server)
     yield url
+    if server.poll() is not None:
+        print(f"the server ended by itself ({server.returncode})")
     server.send_signal(signal.SIGTERM)
     try:
-        server.wait(timeout=10)
+        _, errors = server.communicate(timeout=10)
     except subprocess.TimeoutExpired:
         server.kill()
+        _, errors = server.communicate()
+    print(f"the server's stderr:\n{errors}")  # shown when the test fails

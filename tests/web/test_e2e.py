@@ -10,6 +10,8 @@ server as its own process, and the test as a page on its websocket.
 from __future__ import annotations
 
 import asyncio
+import threading
+import time
 from collections.abc import Iterator
 from typing import Any
 
@@ -44,12 +46,14 @@ async def talk(url: str, request: dict[str, Any]) -> dict[str, Any]:
         return await receive_until(page, is_result(1))
 
 
-def test_a_hal_pin_pops_up_a_dialog_and_a_tool_edit_reaches_iocontrol_and_the_interpreter(
+@pytest.mark.slow
+def test_a_hal_pin_pops_up_a_dialog_a_tool_edit_reaches_iocontrol_and_a_probe_finds_an_edge(
     machine: Machine, page_url: str, hal: Hal
 ) -> None:
-    """One machine for both (a machine takes seconds to start)."""
+    """One machine for all (a machine takes seconds to start)."""
     answer_the_door_dialog(page_url, hal)
     edit_a_tool(machine, page_url)
+    probe_an_edge(machine, page_url, hal)
 
 
 def answer_the_door_dialog(page_url: str, hal: Hal) -> None:
@@ -103,3 +107,54 @@ def edit_a_tool(machine: Machine, page_url: str) -> None:
         machine.command.mdi(line)
         assert machine.command.wait_complete(20) == cnc.RCS_DONE, line
     machine.until(lambda s: s.tool_offset[2] == 1.5)
+
+
+def probe_an_edge(machine: Machine, page_url: str, hal: Hal) -> None:
+    """The edge helper on the real machine: a part whose face is at machine X 20 (the
+    probe input, motion.probe-input, is true beyond it, from a component of this test),
+    a 2 mm tip: the edge is X 21 (the tip's centre touches at 20 - but the tip's side is
+    1 mm further); confirmed to read X 0 in G54, the G54 X offset is 21."""
+    part = component("part", hal=hal)
+    part.newpin("probe", HAL_BIT, HAL_OUT)
+    part.ready()
+    hal.new_signal("probe", HAL_BIT)
+    hal.link("part.probe", "probe")
+    hal.link("motion.probe-input", "probe")
+    x_feedback = hal.find_pin("joint.0.motor-pos-fb")[1]
+    is_running = threading.Event()
+    is_running.set()
+
+    def touch() -> None:
+        while is_running.is_set():
+            part["probe"] = hal.pin_value(x_feedback) >= 20.0
+            time.sleep(0.0005)
+
+    watcher = threading.Thread(target=touch, daemon=True)
+    watcher.start()
+    try:
+        machine.command.mdi("G49 G54 G0 X0 Y0 Z0")
+        assert machine.command.wait_complete(20) == cnc.RCS_DONE
+
+        async def run() -> None:
+            url = page_url + "ws"
+            async with aiohttp.ClientSession() as session, session.ws_connect(url) as page:
+                params = {"axis": "X", "direction": 1, "search": 30, "retract": 1,
+                          "fast_feed": 300, "slow_feed": 30, "tip_diameter": 2}  # fmt: skip
+                await page.send_json({"cmd": "probe", "kind": "edge", "params": params, "id": 1})
+                assert (await receive_until(page, is_result(1)))["status"] == "DONE"
+                done = await receive_until(
+                    page, lambda m: m["type"] == "probe" and m["state"] in ("done", "failed")
+                )
+                assert done["state"] == "done", done
+                assert done["current"] == len(done["steps"]) == 4
+                assert done["result"]["axes"]["X"] == pytest.approx(21.0, abs=0.02)
+                confirm = {"cmd": "probe_confirm", "system": "G54", "values": {"X": 0}}
+                await page.send_json(confirm | {"id": 2})
+                assert (await receive_until(page, is_result(2)))["status"] == "DONE"
+
+        asyncio.run(run())
+        machine.until(lambda s: s.g5x_offset[0] == pytest.approx(21.0, abs=0.02))
+    finally:
+        is_running.clear()
+        watcher.join()
+        part.exit()

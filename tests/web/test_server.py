@@ -12,7 +12,7 @@ import aiohttp
 import pytest
 
 import cnc
-from cnc.ui.web.server import HUB, Access
+from cnc.ui.web.server import HUB, STATIC, Access
 from cnc.ui.web.settings import Settings
 from tests.web.conftest import is_result, is_status_with, receive_until
 
@@ -20,7 +20,10 @@ pytestmark = pytest.mark.asyncio
 
 
 def without_serial(command: dict) -> tuple[str, dict]:
-    fields = {k: v for k, v in command["fields"].items() if k not in ("serial_number", "tag")}
+    """A command's type and fields, without those the API fills in itself (serial, tag,
+    a continuous jog's lease)."""
+    hidden = ("serial_number", "tag", "lease_slot", "lease_pid")
+    fields = {k: v for k, v in command["fields"].items() if k not in hidden}
     return command["type"], fields
 
 
@@ -192,14 +195,17 @@ async def test_programs_are_listed_and_opened_from_the_program_prefix(
 
 
 async def test_the_page_and_its_assets_are_served(web) -> None:
+    """Every asset the page loads is served, and none comes from elsewhere (no CDN)."""
     client = await web()
     page = await client.get("/")
-    assert page.status == 200 and "/static/app.js" in await page.text()
-    for asset in ("app.js", "style.css"):
-        assert (await client.get(f"/static/{asset}")).status == 200
-    text = (await (await client.get("/")).text()) + (
-        await (await client.get("/static/app.js")).text()
-    )
+    text = await page.text()
+    assert page.status == 200 and "/static/js/app.js" in text
+    scripts = sorted(p.name for p in (STATIC / "js").glob("*.js"))
+    assert "app.js" in scripts and "program-worker.js" in scripts
+    for asset in ["style.css", *(f"js/{name}" for name in scripts)]:
+        response = await client.get(f"/static/{asset}")
+        assert response.status == 200, asset
+        text += await response.text()
     assert "http://" not in text and "https://" not in text  # no CDN
 
 

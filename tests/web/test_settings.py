@@ -68,7 +68,8 @@ def test_settings_from_an_ini_file(tmp_path: Path) -> None:
     assert settings.machine == "test" and settings.cycle_time_s == pytest.approx(0.05)
     assert settings.program_prefix == Path.home() / "nc"
     assert settings.mdi_history_file == tmp_path / "hist.txt"
-    assert settings.jog_speed == {"default": 120.0, "min": 0.0, "max": 600.0}
+    # never down to 0 (motion refuses a zero jog velocity): 1 % of the top at least
+    assert settings.jog_speed == {"default": 120.0, "min": 6.0, "max": 600.0}
     assert settings.max_feed_override == pytest.approx(120)
     assert (settings.min_spindle_override, settings.max_spindle_override) == (50, 120)
     assert settings.is_position_actual is False and settings.is_position_relative is True
@@ -124,3 +125,46 @@ def test_the_message_pins_and_the_tool_changer_come_from_the_ini(tmp_path: Path)
     ]
     assert settings.tool_table == tmp_path / "t.tbl" and settings.is_random_toolchanger
     assert Settings().message_pins == [] and not Settings().is_random_toolchanger
+
+
+def test_the_spindle_range_comes_from_the_display_and_the_spindle_sections(
+    tmp_path: Path,
+) -> None:
+    """GUI-013: the manual controls within [SPINDLE_0]'s limits (LinuxCNC 2.9's keys; the
+    reverse maximum is the forward one unless given), and which key set each bound."""
+    ini = tmp_path / "m.ini"
+    ini.write_text("[SPINDLE_0]\nMAX_FORWARD_VELOCITY = 6000\nMIN_FORWARD_VELOCITY = 100\n")
+    settings = Settings.load(str(ini))
+    assert settings.spindle == {
+        "increment": 100.0, "default": 500.0, "min": 100.0, "max": 6000.0, "max_reverse": 6000.0,
+    }  # fmt: skip
+    assert settings.spindle_limit_keys == {
+        "max": "[SPINDLE_0]MAX_FORWARD_VELOCITY",
+        "max_reverse": "[SPINDLE_0]MAX_FORWARD_VELOCITY",
+    }
+    ini.write_text(
+        "[DISPLAY]\nMAX_SPINDLE_0_SPEED = 3000\nDEFAULT_SPINDLE_0_SPEED = 8000\n"
+        "[SPINDLE_0]\nMAX_FORWARD_VELOCITY = 6000\nMAX_REVERSE_VELOCITY = 1000\n"
+    )
+    settings = Settings.load(str(ini))
+    assert (settings.spindle["max"], settings.spindle["max_reverse"]) == (3000, 1000)
+    assert settings.spindle["default"] == 3000  # within the range
+    assert settings.spindle_limit_keys["max_reverse"] == "[SPINDLE_0]MAX_REVERSE_VELOCITY"
+
+
+def test_allowed_hosts_job_history_and_the_tool_setter(tmp_path: Path) -> None:
+    ini = tmp_path / "m.ini"
+    ini.write_text(
+        "[DISPLAY]\nWEB_ALLOWED_HOSTS = CNC.local, shop-pc\n"
+        "[TOOLSENSOR]\nX = 10\nY = 20\nZ = -5\nMAXPROBE = -30\n"
+    )
+    settings = Settings.load(str(ini))
+    assert settings.allowed_hosts == ("cnc.local", "shop-pc")
+    assert settings.job_history_file == tmp_path / "job_history.json"
+    assert settings.tool_sensor == {
+        "x": 10.0, "y": 20.0, "z": -5.0, "maxprobe": -30.0, "search_vel": 200.0, "probe_vel": 20.0,
+    }  # fmt: skip
+    ini.write_text("[TOOLSENSOR]\nX = 10\nY = here\n")
+    settings = Settings.load(str(ini))
+    assert settings.tool_sensor is None
+    assert settings.problems == [f"{ini}:3: [TOOLSENSOR]Y must be a number: tool setter off"]

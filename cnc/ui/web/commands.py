@@ -19,9 +19,11 @@ from pathlib import Path
 from typing import Any
 
 import cnc
+from cnc.atomicfile import atomic_write_text
 from cnc.ui.formatting import parse_float
+from cnc.ui.web.offsets import SYSTEMS
 from cnc.ui.web.settings import Settings
-from iocontrol.tooltable import ToolTable, ToolTableError
+from iocontrol.tooltable import ToolEntry, ToolTable, ToolTableError
 
 TIMEOUT_S = 10.0  # how long a command may take before the page is told it still runs
 PROGRAM_TIMEOUT_S = 3600.0  # an MDI line may be a long move
@@ -152,6 +154,17 @@ class Commands:
         if result != cnc.RCS_DONE:
             raise CommandError(f"{method} not finished after {timeout:g} s (it may still run)")
 
+    def program_scale(self) -> float:
+        """Program units per machine unit (G20/G21 of the moment): what an MDI line needs
+        to say a length in machine units."""
+        mm_per_program_unit = {1: 25.4, 2: 1.0, 3: 10.0}.get(self.stat.program_units, 1.0)
+        return 1.0 / (mm_per_program_unit * self.settings.units_per_mm)
+
+    def mdi(self, line: str, timeout: float = TIMEOUT_S) -> None:
+        """One MDI line, run to its end."""
+        self.ensure_mode(cnc.MODE_MDI)
+        self.send("mdi", line, timeout=timeout)
+
     def ensure_mode(self, mode: int) -> None:
         if self.stat.task_mode != mode:
             self.send("mode", mode)
@@ -275,7 +288,9 @@ def _jog(c: Commands, r: dict[str, Any]) -> None:
         c.send("jog", cnc.JOG_STOP, 1, joint)
         return
     direction = number(r, "direction")
-    speed = number(r, "speed", minimum=0.0) / 60.0  # the API takes units per second
+    speed = number(r, "speed") / 60.0  # the API takes units per second
+    if not speed > 0:
+        raise CommandError("the jog speed must be above 0")
     velocity = speed if direction >= 0 else -speed
     c.ensure_mode(cnc.MODE_MANUAL)
     if action == "start":
@@ -286,30 +301,79 @@ def _jog(c: Commands, r: dict[str, Any]) -> None:
         raise CommandError("'action' must be one of start, stop, increment")
 
 
-@handler("touch_off")
-def _touch_off(c: Commands, r: dict[str, Any]) -> None:
-    """Set the current work offset so that the axis reads "value" (G10 L20 P0)."""
+def _axis_letter(c: Commands, r: dict[str, Any]) -> str:
     letter = str(r.get("axis", "")).upper()
     if len(letter) != 1 or letter not in c.settings.axes:
         raise CommandError(f"unknown axis {r.get('axis')!r}")
+    return letter
+
+
+def _system_number(r: dict[str, Any], default: int = 0) -> int:
+    """ "system": "G54".."G59.3" -> its P number (1..9); absent: ``default`` (0: active)."""
+    name = r.get("system")
+    if name is None:
+        return default
+    if name not in SYSTEMS:
+        raise CommandError(f"'system' must be one of {', '.join(SYSTEMS)}")
+    return SYSTEMS.index(name) + 1
+
+
+def _length(c: Commands, value: float) -> str:
+    """A length in machine units, written in program units for an MDI line."""
+    return f"{value * c.program_scale():.6f}"
+
+
+@handler("touch_off")
+def _touch_off(c: Commands, r: dict[str, Any]) -> None:
+    """Set the offset of coordinate system "system" (default: the active one) so that the
+    axis reads "value" (machine units) where it is now (G10 L20)."""
+    letter = _axis_letter(c, r)
     value = number(r, "value")
-    c.ensure_mode(cnc.MODE_MDI)
-    c.send("mdi", f"G10 L20 P0 {letter}{value:.6f}")
+    system = _system_number(r)
+    c.mdi(f"G10 L20 P{system} {letter}{_length(c, value)}")
 
 
-@handler("tool_set")
-def _tool_set(c: Commands, r: dict[str, Any]) -> None:
-    """{"tool": n, "z": ..., "diameter": ..., "x": ... and "comment": ... optional}: edit
-    one tool, as LinuxCNC's tool editors do: the tool table file is rewritten (atomically),
-    then iocontrol reloads it (EMC_TOOL_LOAD_TOOL_TABLE), so stat.tool_table and the
-    interpreter's copy follow. Works in any state, but not while a program or MDI runs
-    (it may change the table itself)."""
-    tool = whole(r, "tool")
-    if tool <= 0:
-        raise CommandError("'tool' must be at least 1")
-    z, diameter = number(r, "z"), number(r, "diameter", 0.0)
-    x = number(r, "x") if "x" in r else None
-    comment = " ".join(str(r["comment"]).split()) if "comment" in r else None
+@handler("offset_set")
+def _offset_set(c: Commands, r: dict[str, Any]) -> None:
+    """Set one axis of a coordinate system's offset to "value" (machine units; G10 L2), or
+    its XY rotation to "rotation" (degrees)."""
+    system = _system_number(r, default=-1)
+    if system < 0:
+        raise CommandError("'system' must be given")
+    if "rotation" in r:
+        c.mdi(f"G10 L2 P{system} R{number(r, 'rotation'):.6f}")
+        return
+    letter = _axis_letter(c, r)
+    c.mdi(f"G10 L2 P{system} {letter}{_length(c, number(r, 'value'))}")
+
+
+@handler("offset_clear")
+def _offset_clear(c: Commands, r: dict[str, Any]) -> None:
+    """Zero a coordinate system's offsets and rotation, or G92's ("system": "G92")."""
+    if r.get("system") == "G92":
+        c.mdi("G92.1")
+        return
+    system = _system_number(r, default=-1)
+    if system < 0:
+        raise CommandError("'system' must be given")
+    words = " ".join(f"{letter}0" for letter in c.settings.axes)
+    c.mdi(f"G10 L2 P{system} {words} R0")
+
+
+@handler("select_system")
+def _select_system(c: Commands, r: dict[str, Any]) -> None:
+    """Make "system" (G54..G59.3) the active coordinate system."""
+    system = _system_number(r, default=-1)
+    if system < 0:
+        raise CommandError("'system' must be given")
+    c.mdi(SYSTEMS[system - 1])
+
+
+def _edit_tool_table(c: Commands, change: Callable[[ToolTable, Path], None]) -> None:
+    """Apply ``change`` to the tool table file, as LinuxCNC's tool editors do: the file is
+    read, changed, rewritten atomically, then iocontrol reloads it
+    (EMC_TOOL_LOAD_TOOL_TABLE), so stat.tool_table and the interpreter's copy follow. Not
+    while a program or MDI runs (it may change the table itself)."""
     path = c.settings.tool_table
     if path is None:
         raise CommandError("the INI file names no [EMCIO]TOOL_TABLE")
@@ -323,6 +387,31 @@ def _tool_set(c: Commands, r: dict[str, Any]) -> None:
             raise CommandError(f"{exc}; fix the file first") from None
         except OSError as exc:
             raise CommandError(f"cannot read {path}: {exc.strerror}") from None
+        change(table, path)
+        try:
+            table.save(path)
+        except OSError as exc:
+            raise CommandError(f"cannot write {path}: {exc.strerror}") from None
+    c.send("load_tool_table")
+
+
+def _tool_number(r: dict[str, Any]) -> int:
+    tool = whole(r, "tool")
+    if tool <= 0:
+        raise CommandError("'tool' must be at least 1")
+    return tool
+
+
+@handler("tool_set")
+def _tool_set(c: Commands, r: dict[str, Any]) -> None:
+    """{"tool": n, "z": ..., "diameter": ..., "x": ... and "comment": ... optional}: edit
+    one tool (see _edit_tool_table)."""
+    tool = _tool_number(r)
+    z, diameter = number(r, "z"), number(r, "diameter", 0.0)
+    x = number(r, "x") if "x" in r else None
+    comment = " ".join(str(r["comment"]).split()) if "comment" in r else None
+
+    def edit(table: ToolTable, path: Path) -> None:
         index = table.find_index_for_tool(tool)
         if index < 0:
             raise CommandError(f"no tool {tool} in {path}")
@@ -334,11 +423,49 @@ def _tool_set(c: Commands, r: dict[str, Any]) -> None:
         if comment is not None:
             entry.comment = comment
         table.put(index, entry)
-        try:
-            table.save(path)
-        except OSError as exc:
-            raise CommandError(f"cannot write {path}: {exc.strerror}") from None
-    c.send("load_tool_table")
+
+    _edit_tool_table(c, edit)
+
+
+@handler("tool_add")
+def _tool_add(c: Commands, r: dict[str, Any]) -> None:
+    """{"tool": n, "pocket": p (default n), "z", "diameter", "comment" optional}: a new
+    tool (a random tool changer's pocket must be free)."""
+    tool = _tool_number(r)
+    pocket = whole(r, "pocket", tool)
+    if pocket <= 0:
+        raise CommandError("'pocket' must be at least 1")
+    z = number(r, "z") if "z" in r else 0.0
+    diameter = number(r, "diameter", 0.0) if "diameter" in r else 0.0
+    comment = " ".join(str(r.get("comment", "")).split())
+
+    def add(table: ToolTable, path: Path) -> None:
+        if table.find_index_for_tool(tool) > 0:
+            raise CommandError(f"tool {tool} is in {path} already")
+        index = pocket if table.random_toolchanger else table.last_index + 1
+        if table.random_toolchanger and index in table.entries:
+            raise CommandError(f"pocket {pocket} holds a tool already")
+        offset = [0.0] * 9
+        offset[2] = z
+        table.put(index, ToolEntry(tool, pocket, offset, diameter, comment=comment))
+
+    _edit_tool_table(c, add)
+
+
+@handler("tool_delete")
+def _tool_delete(c: Commands, r: dict[str, Any]) -> None:
+    """{"tool": n}: remove a tool from the table (not the one in the spindle)."""
+    tool = _tool_number(r)
+    if c.stat.tool_in_spindle == tool:
+        raise CommandError(f"tool {tool} is in the spindle")
+
+    def delete(table: ToolTable, path: Path) -> None:
+        index = table.find_index_for_tool(tool)
+        if index <= 0:
+            raise CommandError(f"no tool {tool} in {path}")
+        del table.entries[index]
+
+    _edit_tool_table(c, delete)
 
 
 # ------------------------------------------------------------------ MDI
@@ -349,6 +476,13 @@ def _mdi(c: Commands, r: dict[str, Any]) -> str:
     c.remember_mdi(line)
     c.send("mdi", line, timeout=PROGRAM_TIMEOUT_S)
     return "DONE"
+
+
+@handler("mdi_line")
+def _mdi_line(c: Commands, r: dict[str, Any]) -> None:
+    """One MDI line of the server's own (probing, offsets): not in the history."""
+    timeout = r.get("timeout", TIMEOUT_S)
+    c.mdi(text(r, "text"), timeout=timeout if isinstance(timeout, int | float) else TIMEOUT_S)
 
 
 @handler("macro")
@@ -372,6 +506,30 @@ def _open(c: Commands, r: dict[str, Any]) -> None:
         path = run_filter(program, path)
     c.ensure_mode(cnc.MODE_AUTO)
     c.send("program_open", str(path))
+
+
+@handler("save_program")
+def _save_program(c: Commands, r: dict[str, Any]) -> str:
+    """{"file": name under PROGRAM_PREFIX, "text": the program}: written atomically (task
+    may be reading the old one); a new file needs a program extension."""
+    name = text(r, "file")
+    content = r.get("text")
+    if not isinstance(content, str):
+        raise CommandError("'text' must be the program's text")
+    folder = c.settings.program_prefix
+    if folder is None:
+        raise CommandError("no [DISPLAY]PROGRAM_PREFIX")
+    path = (folder / name).resolve()
+    if (
+        not path.is_relative_to(folder.resolve())
+        or path.suffix.lower() not in c.settings.extensions
+    ):
+        raise CommandError(f"{name!r}: not a program name in {folder}")
+    try:
+        atomic_write_text(path, content if content.endswith("\n") else content + "\n")
+    except OSError as exc:
+        raise CommandError(f"cannot write {path}: {exc.strerror}") from None
+    return "saved"
 
 
 def run_filter(program: str, path: Path) -> Path:
@@ -466,17 +624,38 @@ def _spindle(c: Commands, r: dict[str, Any]) -> None:
     if action == "stop":
         c.send("spindle", cnc.SPINDLE_OFF)
         return
-    if action in ("faster", "slower"):
-        c.send("spindle", cnc.SPINDLE_INCREASE if action == "faster" else cnc.SPINDLE_DECREASE)
-        return
+    limits = c.settings.spindle
+    if action in ("faster", "slower"):  # by SPINDLE_INCREMENT, within the range
+        spindle = c.stat.spindle[0]
+        if not spindle["direction"]:
+            raise CommandError("the spindle is not turning")
+        step = limits["increment"] if action == "faster" else -limits["increment"]
+        top = limits["max"] if spindle["direction"] > 0 else limits["max_reverse"]
+        speed = min(max(abs(spindle["speed"]) + step, limits["min"]), top)
+        action = "forward" if spindle["direction"] > 0 else "reverse"
+    else:
+        speed = number(r, "speed", 0.0) if "speed" in r else limits["default"]
     directions = {"forward": cnc.SPINDLE_FORWARD, "reverse": cnc.SPINDLE_REVERSE}
     if action not in directions:
         raise CommandError("'action' must be one of forward, reverse, stop, faster, slower")
-    limits = c.settings.spindle
-    speed = number(r, "speed", 0.0) if "speed" in r else limits["default"]
-    speed = min(max(speed, limits["min"]), limits["max"])  # the INI's manual range (GUI-013)
+    check_spindle_speed(c.settings, speed, action == "reverse")
     c.ensure_mode(cnc.MODE_MANUAL)
     c.send("spindle", directions[action], speed)
+
+
+def check_spindle_speed(settings: Settings, speed: float, is_reverse: bool) -> None:
+    """Refuse a manual speed outside the INI's range (GUI-013), naming the key."""
+    limits, keys = settings.spindle, settings.spindle_limit_keys
+    top, key = (
+        (limits["max_reverse"], keys.get("max_reverse"))
+        if is_reverse
+        else (limits["max"], keys.get("max"))
+    )
+    if speed > top:
+        source = f" ({key})" if key else ""
+        raise CommandError(f"{speed:g} rpm is above the maximum, {top:g} rpm{source}")
+    if speed < limits["min"]:
+        raise CommandError(f"{speed:g} rpm is below the minimum, {limits['min']:g} rpm")
 
 
 @handler("flood")

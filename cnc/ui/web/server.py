@@ -1,256 +1,74 @@
 """``cnc ui web [INI] [--host H] [--port P] [--token T] [--read-only-token R]``: the operator
-UI in the browser (issue 7, GUI-*).
+UI in the browser (issue 7, issue 18, GUI-*).
 
 One process attaches to the controller like any UI (``cnc.stat``, ``cnc.command``,
 ``cnc.error_channel``) and serves the page (``static/``) and a websocket, ``/ws``:
 
 - server -> page: ``{"type": "status", "data": {...}}`` (the first one complete, then only
-  the fields that changed, every [DISPLAY]CYCLE_TIME), ``{"type": "notice", "kind":
-  "error"|"text"|"display", "text": ...}`` for each operator message, ``{"type": "result",
-  "id": ..., "status": "DONE"|"ERROR", "message": ...}`` for each command, ``{"type":
-  "history", "lines": [...]}`` when the MDI history grows, ``{"type": "dialog", "name":
-  pin, "kind": "ok"|"yesno"|"none", "title", "text", "details", "icon"}`` and ``{"type":
-  "dialog_close", "name": pin}`` for the [DISPLAY] message dialogs (messages.py).
-- page -> server: ``{"cmd": NAME, "id": ..., ...arguments}`` (commands.py lists them;
-  ``{"cmd": "answer", "name": pin, "is_yes": bool}`` answers a message dialog).
+  the fields that changed, every [DISPLAY]CYCLE_TIME; ``job`` is the running program's
+  progress), ``{"type": "notice", "kind": "error"|"text"|"display", "text", "details"?}``
+  (one per event, notices.py), ``{"type": "result", "id", "status": "DONE"|"ERROR",
+  "message"}`` for each command, ``{"type": "history", "lines"}`` (MDI), ``{"type":
+  "program", ...}`` what is known of the open program (preview points so far, its error,
+  the time estimate: jobs.py), ``{"type": "jobs", "jobs"}`` the run history (job.py),
+  ``{"type": "probe", ...}`` a probing helper's steps (probing.py), ``{"type": "dialog",
+  ...}`` / ``{"type": "dialog_close", "name"}`` for [DISPLAY] message dialogs (messages.py).
+- page -> server: ``{"cmd": NAME, "id": ..., ...arguments}``, all handled by
+  ``Hub.dispatch`` (hub.py; the controller commands are in commands.py).
 
 HTTP: ``/`` the page, ``/static/*`` its assets, ``/api/config`` what the page offers (from
-the INI), ``/api/files`` the programs of PROGRAM_PREFIX, ``/api/program`` the lines of the
-open program, ``/api/preview`` its toolpath (preview.py), ``/api/tools`` the tool table,
+the INI), ``/api/files`` the programs of PROGRAM_PREFIX, ``/api/program/text`` the open
+program's text, ``/api/preview/data`` its toolpath (binary, preview.RECORD), both for the
+program ``number`` the "program" message names, ``/api/tools`` the tool table,
+``/api/offsets`` the work offsets, ``/api/editor?file=`` a program's text for the editor,
 ``POST /api/upload`` a program into PROGRAM_PREFIX.
-
-Commands run in worker threads: the event loop never waits for the controller. A browser
-that disconnects changes nothing on the machine, with one exception for safety: a
-continuous jog it started and did not stop is stopped (as AXIS stops jogs on focus loss).
 
 Access: 127.0.0.1 by default; any other address needs a token (``--token`` or
 $CNC_WEB_TOKEN). With a token, every request needs it (``?token=``, ``Authorization:
 Bearer``, or the cookie the server sets on the first request that had it), else 401. A
 read-only token ($CNC_WEB_READ_ONLY_TOKEN) may watch; its commands are refused. Websockets
-and uploads from another site's page (Origin not this server) are refused.
+and uploads from another site's page (Origin not this server) are refused. A request whose
+Host is not the address the server is bound to, ``localhost`` or a name of
+[DISPLAY]WEB_ALLOWED_HOSTS is refused (421): a page of another site that re-binds its own
+name to 127.0.0.1 (DNS rebinding) would otherwise be "same origin" and could drive the
+machine.
 """
 
 from __future__ import annotations
 
 import argparse
 import asyncio
-import contextlib
 import hmac
 import ipaddress
 import json
 import os
 import sys
 from collections.abc import Awaitable, Callable
-from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 from urllib.parse import urlsplit
 
 from aiohttp import WSMsgType, web
 
 import cnc
-from cnc.ini import IniError, IniFile
+from cnc.ini import IniError
 from cnc.ui.controller import Controller
-from cnc.ui.formatting import MESSAGE_KINDS
-from cnc.ui.web.commands import CommandError, Commands, tool_comments
-from cnc.ui.web.messages import UserMessages
-from cnc.ui.web.preview import preview
+from cnc.ui.web.commands import tool_comments
+from cnc.ui.web.hub import Client, Hub, send
+from cnc.ui.web.jobs import RECORD_SIZE
+from cnc.ui.web.offsets import offsets_table, read_parameters
 from cnc.ui.web.settings import Settings
-from cnc.ui.web.status import DISCONNECTED, diff, snapshot
-from hal.core import HalError
 
 STATIC = Path(__file__).with_name("static")
 DEFAULT_HOST, DEFAULT_PORT = "127.0.0.1", 8750
 TOKEN_ENV, READ_ONLY_TOKEN_ENV = "CNC_WEB_TOKEN", "CNC_WEB_READ_ONLY_TOKEN"
 COOKIE = "cnc_token"
-WORKERS = 8  # commands waiting for the controller at once
-URGENT_WORKERS = 2  # for stops, which must never queue behind long MDI lines
-MAX_PROGRAM_BYTES = 20_000_000
-HUB = web.AppKey("hub", "Hub")
+MAX_UPLOAD_BYTES = 200_000_000  # a program of millions of lines
+MAX_EDITOR_BYTES = 2_000_000  # the editor takes programs up to this size
+MAX_PREVIEW_CHUNK = 65_536  # toolpath records per /api/preview/data answer (1 MB)
+WEBSOCKET_MAX_MESSAGE = 8_000_000  # an editor's text, saved or checked
+HUB = web.AppKey("hub", Hub)
 IS_CONTROL = web.RequestKey("is_control", bool)  # the request may send commands
-
-
-@dataclass(eq=False)
-class Client:
-    """One connected page."""
-
-    socket: web.WebSocketResponse
-    is_control: bool
-    jogging: set[int] = field(default_factory=set)  # joints in a continuous jog it started
-    jog_lock: asyncio.Lock = field(default_factory=asyncio.Lock)  # jogs run in order
-
-
-class Hub:
-    """The controller's status and messages, pushed to every connected page."""
-
-    def __init__(self, settings: Settings, source: str | None) -> None:
-        self.settings = settings
-        self.controller = Controller(source)
-        self.commands = Commands(settings, source)
-        self.executor = ThreadPoolExecutor(WORKERS, thread_name_prefix="cnc-web")
-        self.urgent_executor = ThreadPoolExecutor(URGENT_WORKERS, thread_name_prefix="cnc-stop")
-        self.clients: set[Client] = set()
-        self.status: dict[str, Any] = dict(DISCONNECTED)
-        self._poller: asyncio.Task[None] | None = None
-        self._tasks: set[asyncio.Task[Any]] = set()
-        self.preview_key: tuple[str, int] | None = None  # (file, mtime) of preview_result
-        self.preview_result: dict[str, Any] = {}
-        self.messages = UserMessages(settings.message_pins)  # [DISPLAY] MESSAGE_* dialogs
-        self.problems = list(settings.problems)  # shown to every page that connects
-
-    # ---------------------------------------------------------------- status
-    def poll(self) -> list[dict[str, Any]]:
-        """Read status and messages once; the messages for the pages (status diff first)."""
-        try:
-            new = snapshot(self.controller.poll(), self.settings)
-            messages = self.controller.read_messages()
-        except cnc.error:
-            self.controller.reset()  # the next poll finds a restarted controller
-            new, messages = dict(DISCONNECTED), []
-        outgoing = []
-        changed = diff(self.status, new)
-        if changed:
-            self.status.update(changed)
-            outgoing.append({"type": "status", "data": changed})
-        for message in messages:
-            kind = MESSAGE_KINDS.get(message.kind, "text")
-            outgoing.append({"type": "notice", "kind": kind, "text": message.text})
-        return outgoing + self.messages.poll()
-
-    async def _poll_forever(self) -> None:
-        """Poll every cycle_time_s, on a fixed schedule (a late cycle does not shift the
-        next ones; cycles missed altogether are skipped)."""
-        loop = asyncio.get_running_loop()
-        period = self.settings.cycle_time_s
-        due = loop.time()
-        while True:
-            for message in self.poll():
-                await self.broadcast(message)
-            due = max(due + period, loop.time())
-            await asyncio.sleep(due - loop.time())
-
-    async def broadcast(self, message: dict[str, Any]) -> None:
-        text = json.dumps(message)
-        for client in list(self.clients):
-            await send(client, text)
-
-    async def start(self, _app: web.Application) -> None:
-        if self.messages.pins:
-            try:
-                self.messages.open()
-            except HalError as exc:
-                self.problems.append(f"[DISPLAY] MESSAGE_* pins not created: {exc}")
-        for problem in self.problems:
-            print(f"cnc ui web: {problem}", file=sys.stderr, flush=True)
-        self._poller = asyncio.create_task(self._poll_forever())
-
-    async def stop(self, _app: web.Application) -> None:
-        if self._poller is not None:
-            self._poller.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await self._poller
-        self.commands.is_stopping.set()
-        for client in list(self.clients):
-            await client.socket.close()
-        for executor in (self.executor, self.urgent_executor):
-            executor.shutdown(wait=False, cancel_futures=True)
-        self.controller.close()
-        self.messages.close()
-
-    # ---------------------------------------------------------------- commands
-    async def run(self, client: Client, request: dict[str, Any]) -> dict[str, Any]:
-        """Run one command of a page; the result message."""
-        answer: dict[str, Any] = {"type": "result", "id": request.get("id")}
-        if not client.is_control:
-            return answer | {"status": "ERROR", "message": "read-only access: command refused"}
-        name = request.get("cmd")
-        if name == "answer":  # a message dialog: answered here, in the event loop
-            return answer | await self._answer_dialog(request)
-        if name == "jog":
-            async with client.jog_lock:  # a stop must never overtake its start
-                self._track_jog(client, request)
-                outcome = await self._execute(request)
-        else:
-            outcome = await self._execute(request)
-        if name in ("mdi", "macro"):
-            await self.broadcast({"type": "history", "lines": list(self.commands.mdi_history)})
-        return answer | outcome
-
-    async def _answer_dialog(self, request: dict[str, Any]) -> dict[str, Any]:
-        """{"cmd": "answer", "name": pin name, "is_yes": bool}: close the dialog everywhere."""
-        try:
-            closing = self.messages.answer(request.get("name"), request.get("is_yes"))
-        except ValueError as exc:
-            return {"status": "ERROR", "message": f"answer: {exc}"}
-        await self.broadcast(closing)
-        return {"status": "DONE", "message": "DONE"}
-
-    async def _execute(self, request: dict[str, Any]) -> dict[str, Any]:
-        loop = asyncio.get_running_loop()
-        executor = self.urgent_executor if is_urgent(request) else self.executor
-        try:
-            message = await loop.run_in_executor(executor, self.commands.run, request)
-        except CommandError as exc:
-            return {"status": "ERROR", "message": str(exc), "is_reported": exc.is_reported}
-        return {"status": "DONE", "message": message}
-
-    def _track_jog(self, client: Client, request: dict[str, Any]) -> None:
-        """Remember the continuous jogs a page started, to stop them if it goes away."""
-        try:
-            joint = self.commands.joint_of(request)
-        except CommandError:
-            return
-        if request.get("action") == "start":
-            client.jogging.add(joint)
-        else:
-            client.jogging.discard(joint)
-
-    async def disconnected(self, client: Client) -> None:
-        self.clients.discard(client)
-        for joint in sorted(client.jogging):
-            async with client.jog_lock:
-                await self._execute({"cmd": "jog", "action": "stop", "joint": joint})
-
-    def make_preview(self, program: str) -> dict[str, Any]:
-        """Run ``program`` through a preview interpreter of its own (in a worker thread)."""
-        settings = self.settings
-        ini = None
-        if settings.ini_file:
-            with contextlib.suppress(IniError):
-                ini = IniFile.load(settings.ini_file)
-        return preview(
-            program,
-            units_per_mm=settings.units_per_mm,
-            parameter_file=str(settings.parameter_file or ""),
-            tool_table=str(settings.tool_table) if settings.tool_table else None,
-            ini=ini,
-        )
-
-    def keep(self, task: asyncio.Task[Any]) -> None:
-        """Hold a reference to a task until it is done (else it may be collected)."""
-        self._tasks.add(task)
-        task.add_done_callback(self._tasks.discard)
-
-    def page_config(self, client_is_control: bool) -> dict[str, Any]:
-        return self.settings.page_config() | {
-            "is_control": client_is_control,
-            "mdi_history": list(self.commands.mdi_history),
-        }
-
-
-def is_urgent(request: dict[str, Any]) -> bool:
-    """Whether a command stops something: E-stop, abort, the end of a jog."""
-    name = request.get("cmd")
-    return name in ("abort", "estop") or (name == "jog" and request.get("action") == "stop")
-
-
-async def send(client: Client, text: str) -> None:
-    """Send to a page; a page that went away is dropped, never an error of the server."""
-    if client.socket.closed:
-        return
-    with contextlib.suppress(ConnectionError, RuntimeError):
-        await client.socket.send_str(text)
 
 
 # ------------------------------------------------------------------ access
@@ -294,11 +112,59 @@ def is_same_origin(request: web.Request) -> bool:
     return origin is None or urlsplit(origin).netloc == request.host
 
 
-def access_middleware(access: Access) -> Callable[..., Awaitable[web.StreamResponse]]:
+@dataclass(frozen=True)
+class HostCheck:
+    """Which Host headers the server answers: its bound address, ``localhost``, and the
+    names of [DISPLAY]WEB_ALLOWED_HOSTS. A server bound to every address (0.0.0.0, ::)
+    also answers any IP address: an address cannot be re-bound by another site's DNS."""
+
+    bound: str = DEFAULT_HOST
+    names: tuple[str, ...] = ()
+
+    def is_allowed(self, host_header: str) -> bool:
+        name = _host_name(host_header)
+        if name is None:
+            return False
+        if name == "localhost" or name in self.names:
+            return True
+        try:
+            address = ipaddress.ip_address(name)
+        except ValueError:
+            return False  # a DNS name nobody configured
+        try:
+            bound = ipaddress.ip_address(self.bound)
+        except ValueError:  # bound by name (e.g. "localhost"): its loopback addresses
+            return address.is_loopback
+        return bound.is_unspecified or address == bound
+
+
+def _host_name(header: str) -> str | None:
+    """The name of a Host header, lower case, without port or IPv6 brackets."""
+    text = header.strip().lower()
+    if not text:
+        return None
+    if text.startswith("["):  # [::1]:8750
+        end = text.find("]")
+        return text[1:end] if end > 0 else None
+    name, _, port = text.rpartition(":") if text.count(":") == 1 else (text, "", "")
+    if port and not port.isdigit():
+        return None
+    return name.rstrip(".")
+
+
+def access_middleware(
+    access: Access, hosts: HostCheck
+) -> Callable[..., Awaitable[web.StreamResponse]]:
     @web.middleware
     async def check(
         request: web.Request, handler: Callable[[web.Request], Awaitable[web.StreamResponse]]
     ) -> web.StreamResponse:
+        if not hosts.is_allowed(request.headers.get("Host", "")):
+            return web.Response(
+                status=421,
+                text="421: this server does not answer that host name (add it to "
+                "[DISPLAY]WEB_ALLOWED_HOSTS to reach the machine by it)\n",
+            )
         token, is_explicit = given_token(request)
         role = access.role(token)
         if role is None:
@@ -328,37 +194,49 @@ async def files(request: web.Request) -> web.Response:
     return web.json_response({"files": names})
 
 
-async def program(request: web.Request) -> web.Response:
-    """The text of the program task has open (stat.file)."""
-    name = request.app[HUB].status.get("file") or ""
-    path = Path(name)
-    if not name or not path.is_file():
-        return web.json_response({"file": name, "lines": []})
+def _analysis(request: web.Request):  # type: ignore[no-untyped-def]
+    """The analysis of the open program the request names (``number``), or 409."""
+    current = request.app[HUB].jobs.current
+    if current is None or request.query.get("number") != str(current.number):
+        raise web.HTTPConflict(text="409: that program is no longer the open one\n")
+    return current
+
+
+async def program_text(request: web.Request) -> web.StreamResponse:
+    """The text of the open program, as it is on disk (the page splits it into lines):
+    sent by the operating system, the server's loop never reads it."""
+    analysis = _analysis(request)
+    return web.FileResponse(
+        analysis.path,
+        headers={"Cache-Control": "no-store", "Content-Type": "text/plain; charset=utf-8"},
+    )
+
+
+async def preview_data(request: web.Request) -> web.Response:
+    """The open program's toolpath from record ``from`` on: what the preview job has
+    written so far (whole records, at most MAX_PREVIEW_CHUNK)."""
+    analysis = _analysis(request)
+    try:
+        first = max(int(request.query.get("from", "0")), 0)
+    except ValueError:
+        raise web.HTTPBadRequest(text="400: 'from' must be a whole number\n") from None
+    count = min(analysis.preview_points - first, MAX_PREVIEW_CHUNK)
+    if count <= 0:
+        return web.Response(body=b"", content_type="application/octet-stream")
     loop = asyncio.get_running_loop()
-    lines = await loop.run_in_executor(request.app[HUB].executor, read_lines, path)
-    return web.json_response({"file": name, "lines": lines})
+    path = analysis.folder / "preview.bin"
+    data = await loop.run_in_executor(
+        request.app[HUB].executor, read_range, path, first * RECORD_SIZE, count * RECORD_SIZE
+    )
+    return web.Response(
+        body=data, content_type="application/octet-stream", headers={"Cache-Control": "no-store"}
+    )
 
 
-def read_lines(path: Path) -> list[str]:
-    """The lines of a program (at most MAX_PROGRAM_BYTES of it), whatever its encoding."""
+def read_range(path: Path, start: int, size: int) -> bytes:
     with open(path, "rb") as file:
-        data = file.read(MAX_PROGRAM_BYTES)
-    return data.decode("utf-8", errors="replace").splitlines()
-
-
-async def toolpath(request: web.Request) -> web.Response:
-    """The preview of the program task has open (computed once per file version)."""
-    hub = request.app[HUB]
-    name = hub.status.get("file") or ""
-    path = Path(name)
-    if not name or not path.is_file():
-        return web.json_response({"file": name, "points": [], "error": None})
-    key = (name, path.stat().st_mtime_ns)
-    if hub.preview_key != key:
-        loop = asyncio.get_running_loop()
-        hub.preview_result = await loop.run_in_executor(hub.executor, hub.make_preview, name)
-        hub.preview_key = key
-    return web.json_response({"file": name} | hub.preview_result)
+        file.seek(start)
+        return file.read(size)
 
 
 async def tools(request: web.Request) -> web.Response:
@@ -381,6 +259,38 @@ async def tools(request: web.Request) -> web.Response:
         if entry.id > 0 and (index > 0 or settings.is_random_toolchanger)  # 0: the spindle
     ]  # fmt: skip
     return web.json_response({"tools": entries})
+
+
+async def offsets(request: web.Request) -> web.Response:
+    """The work offsets table (offsets.py)."""
+    hub = request.app[HUB]
+    try:
+        stat = hub.controller.poll()
+    except cnc.error:
+        stat = None
+    loop = asyncio.get_running_loop()
+    parameters = await loop.run_in_executor(
+        hub.executor, read_parameters, hub.settings.parameter_file
+    )
+    return web.json_response(offsets_table(parameters, stat, hub.settings.axes))
+
+
+async def editor_text(request: web.Request) -> web.Response:
+    """A program under PROGRAM_PREFIX (``file``), for the editor."""
+    hub = request.app[HUB]
+    try:
+        path = hub.commands.program_path(request.query.get("file", ""))
+    except Exception as exc:  # CommandError: no such program
+        raise web.HTTPNotFound(text=f"404: {exc}\n") from None
+    if path.stat().st_size > MAX_EDITOR_BYTES:
+        raise web.HTTPRequestEntityTooLarge(
+            MAX_EDITOR_BYTES, path.stat().st_size, text="413: too large for the editor\n"
+        )
+    loop = asyncio.get_running_loop()
+    data = await loop.run_in_executor(hub.executor, path.read_bytes)
+    return web.json_response(
+        {"file": request.query["file"], "text": data.decode("utf-8", "replace")}
+    )
 
 
 async def upload(request: web.Request) -> web.Response:
@@ -416,20 +326,14 @@ async def websocket(request: web.Request) -> web.WebSocketResponse:
     if not is_same_origin(request):
         raise web.HTTPForbidden(text="403: websocket from another site\n")
     hub = request.app[HUB]
-    socket = web.WebSocketResponse(heartbeat=20)
+    socket = web.WebSocketResponse(heartbeat=20, max_msg_size=WEBSOCKET_MAX_MESSAGE)
     await socket.prepare(request)
     client = Client(socket, request[IS_CONTROL])
     hub.clients.add(client)
     tasks: set[asyncio.Task[None]] = set()
     try:
-        await send(
-            client, json.dumps({"type": "config", "data": hub.page_config(client.is_control)})
-        )
-        await send(client, json.dumps({"type": "status", "data": hub.status}))
-        for problem in hub.problems:
-            await send(client, json.dumps({"type": "notice", "kind": "error", "text": problem}))
-        for dialog in hub.messages.open_dialogs():
-            await send(client, json.dumps(dialog))
+        for message in hub.greeting(client):
+            await send(client, json.dumps(message))
         async for message in socket:
             if message.type != WSMsgType.TEXT:
                 continue
@@ -443,7 +347,7 @@ async def websocket(request: web.Request) -> web.WebSocketResponse:
 
 
 async def _answer(hub: Hub, client: Client, text: str) -> None:
-    """Parse and run one command; a bad one gets an ERROR result, never a crash."""
+    """Parse and run one request; a bad one gets an ERROR result, never a crash."""
     try:
         request = json.loads(text)
     except ValueError as exc:
@@ -453,16 +357,22 @@ async def _answer(hub: Hub, client: Client, text: str) -> None:
     if problem is not None:
         reply = {"type": "result", "id": None, "status": "ERROR", "message": problem}
     else:
-        reply = await hub.run(client, request)
-    await send(client, json.dumps(reply))
+        reply = await hub.dispatch(client, request)
+    if reply is not None:
+        await send(client, json.dumps(reply))
 
 
 def make_app(
-    settings: Settings, source: str | None = None, access: Access = Access()
+    settings: Settings,
+    source: str | None = None,
+    access: Access = Access(),
+    hosts: HostCheck | None = None,
 ) -> web.Application:
-    """The web application for one controller (``source``: INI/NML file or None)."""
+    """The web application for one controller (``source``: INI/NML file or None), bound
+    to ``hosts.bound`` (default 127.0.0.1; its allowed names from the settings)."""
+    hosts = hosts or HostCheck(DEFAULT_HOST, settings.allowed_hosts)
     app = web.Application(
-        middlewares=[access_middleware(access)], client_max_size=MAX_PROGRAM_BYTES
+        middlewares=[access_middleware(access, hosts)], client_max_size=MAX_UPLOAD_BYTES
     )
     hub = Hub(settings, source)
     app[HUB] = hub
@@ -472,9 +382,11 @@ def make_app(
     app.router.add_get("/ws", websocket)
     app.router.add_get("/api/config", config)
     app.router.add_get("/api/files", files)
-    app.router.add_get("/api/program", program)
-    app.router.add_get("/api/preview", toolpath)
+    app.router.add_get("/api/program/text", program_text)
+    app.router.add_get("/api/preview/data", preview_data)
     app.router.add_get("/api/tools", tools)
+    app.router.add_get("/api/offsets", offsets)
+    app.router.add_get("/api/editor", editor_text)
     app.router.add_post("/api/upload", upload)
     app.router.add_static("/static/", STATIC)
     return app
@@ -538,7 +450,8 @@ def main(argv: list[str]) -> int:
     except (cnc.error, IniError) as exc:  # IniError: "file:line: cause"
         print(f"cnc ui web: {exc}", file=sys.stderr)
         return 2
-    app = make_app(settings, args.ini, Access(args.token, args.read_only_token))
+    hosts = HostCheck(args.host, settings.allowed_hosts)
+    app = make_app(settings, args.ini, Access(args.token, args.read_only_token), hosts)
     print(f"cnc ui web: serving http://{args.host}:{args.port}/", flush=True)
     # SIGINT/SIGTERM stop it; pages are closed by Hub.stop, so the shutdown need not wait.
     web.run_app(

@@ -1,5 +1,14 @@
-"""What the web UI takes from the INI file: [DISPLAY], [MDI_COMMAND_LIST], [FILTER].
+"""What the web UI takes from the INI file: [DISPLAY], [MDI_COMMAND_LIST], [FILTER], the
+spindle's speed range ([SPINDLE_0]), the tool setter ([TOOLSENSOR], as gmoccapy has it).
 ([DISPLAY] MESSAGE_* and MULTIMESSAGE_* are read by messages.py.)
+
+Keys of our own, in [DISPLAY]:
+
+- ``WEB_ALLOWED_HOSTS = cnc.local shop-pc``: host names (besides the bound address and
+  ``localhost``) by which the page may be reached: any other Host header is refused, so a
+  web page elsewhere cannot reach the machine by DNS rebinding.
+- ``JOB_HISTORY_FILE = job_history.json``: where the history of program runs is kept
+  (relative to the INI's folder, as MDI_HISTORY_FILE; the default is that name).
 
 ``Settings.load(path)`` reads every value once at start; ``Settings()`` is a machine without
 an INI file (defaults only). ``page_config()`` is the part the page needs, as JSON.
@@ -7,6 +16,7 @@ an INI file (defaults only). ``page_config()`` is the part the page needs, as JS
 
 from __future__ import annotations
 
+import math
 import os
 import re
 from dataclasses import dataclass, field
@@ -23,6 +33,8 @@ DEFAULT_CYCLE_TIME_S = 0.1
 DEFAULT_INCREMENTS = "continuous, 10 mm, 1 mm, 0.1 mm, 0.01 mm"
 DEFAULT_ANGULAR_INCREMENTS = "continuous, 90, 45, 15, 1, 0.1"
 DEFAULT_EXTENSIONS = (".ngc", ".nc", ".tap")
+DEFAULT_JOB_HISTORY_FILE = "job_history.json"
+MIN_JOG_FRACTION = 0.01  # the jog speed slider's lowest value, of its highest, at least
 MM_PER_INCH = 25.4
 _INCREMENT = re.compile(r"\s*([0-9.]+)\s*(mm|inch|in|cm|um|mil)?\s*", re.IGNORECASE)
 _UNIT_MM = {"mm": 1.0, "cm": 10.0, "um": 0.001, "inch": MM_PER_INCH, "in": MM_PER_INCH}
@@ -123,8 +135,10 @@ class Settings:
     min_spindle_override: float = 50.0
     max_spindle_override: float = 120.0
     spindle: dict[str, float] = field(
-        default_factory=lambda: {"increment": 100.0, "default": 500.0, "min": 0.0, "max": 1e5}
-    )
+        default_factory=lambda: {"increment": 100.0, "default": 500.0, "min": 0.0, "max": 1e5,
+                                 "max_reverse": 1e5}
+    )  # fmt: skip
+    spindle_limit_keys: dict[str, str] = field(default_factory=dict)  # "max": "[SPINDLE_0]..."
     is_lathe: bool = False  # [DISPLAY]MACHINE_TYPE_HINT = LATHE or LATHE = 1 (GUI-010)
     is_position_relative: bool = True
     is_position_actual: bool = True
@@ -138,6 +152,11 @@ class Settings:
     limits: dict[str, list[float]] = field(default_factory=dict)  # axis -> [min, max]
     filters: dict[str, str] = field(default_factory=dict)  # [FILTER] extension -> program
     message_pins: list[MessagePin] = field(default_factory=list)  # GUI-018/019
+    allowed_hosts: tuple[str, ...] = ()  # [DISPLAY]WEB_ALLOWED_HOSTS, lower case
+    job_history_file: Path | None = None  # [DISPLAY]JOB_HISTORY_FILE
+    # [TOOLSENSOR] X Y Z (machine coordinates of the tool setter, where probing starts),
+    # MAXPROBE (how far down it probes), SEARCH_VEL and PROBE_VEL (units per minute)
+    tool_sensor: dict[str, float] | None = None
     problems: list[str] = field(default_factory=list)  # "file:line: cause", shown to pages
 
     @classmethod
@@ -168,6 +187,10 @@ class Settings:
             extensions += [ext.strip().lower() for ext in patterns.split(",") if ext.strip()]
         prefix = ini_path(display("PROGRAM_PREFIX"), folder)
         message_pins, problems = read_message_pins(parsed)
+        spindle, spindle_keys = _spindle(parsed)
+        jog_max = number("MAX_LINEAR_VELOCITY", default_speed / 60 * 5) * 60
+        angular_max = number("MAX_ANGULAR_VELOCITY", 60.0) * 60
+        history = display("JOB_HISTORY_FILE") or DEFAULT_JOB_HISTORY_FILE
         return cls(
             ini_file=str(folder / Path(path).name),
             machine=ini.find("EMC", "MACHINE") or "",
@@ -177,16 +200,12 @@ class Settings:
             axes="".join(dict.fromkeys(c for c in coordinates if c in AXIS_LETTERS)),
             increments=increments(display("INCREMENTS"), units_per_mm),
             angular_increments=angular_increments(display("ANGULAR_INCREMENTS")),
-            jog_speed={
-                "default": default_speed,
-                "min": number("MIN_LINEAR_VELOCITY", 0.0) * 60,
-                "max": number("MAX_LINEAR_VELOCITY", default_speed / 60 * 5) * 60,
-            },
-            angular_jog_speed={
-                "default": number("DEFAULT_ANGULAR_VELOCITY", 6.0) * 60,
-                "min": number("MIN_ANGULAR_VELOCITY", 0.0) * 60,
-                "max": number("MAX_ANGULAR_VELOCITY", 60.0) * 60,
-            },
+            jog_speed=_jog_range(default_speed, number("MIN_LINEAR_VELOCITY", 0.0) * 60, jog_max),
+            angular_jog_speed=_jog_range(
+                number("DEFAULT_ANGULAR_VELOCITY", 6.0) * 60,
+                number("MIN_ANGULAR_VELOCITY", 0.0) * 60,
+                angular_max,
+            ),
             max_feed_override=override_percent(display("MAX_FEED_OVERRIDE"), 120.0),
             max_rapid_override=min(override_percent(display("MAX_RAPID_OVERRIDE"), 100.0), 100),
             min_spindle_override=override_percent(
@@ -195,12 +214,8 @@ class Settings:
             max_spindle_override=override_percent(
                 display("MAX_SPINDLE_0_OVERRIDE") or display("MAX_SPINDLE_OVERRIDE"), 120.0
             ),
-            spindle={
-                "increment": number("SPINDLE_INCREMENT", 100.0),
-                "default": number("DEFAULT_SPINDLE_0_SPEED", 500.0),
-                "min": number("MIN_SPINDLE_0_SPEED", 0.0),
-                "max": number("MAX_SPINDLE_0_SPEED", 100_000.0),
-            },
+            spindle=spindle,
+            spindle_limit_keys=spindle_keys,
             is_lathe=_is_lathe(display("MACHINE_TYPE_HINT"), display("LATHE")),
             is_position_relative=(display("POSITION_OFFSET") or "RELATIVE").upper() != "MACHINE",
             is_position_actual=(display("POSITION_FEEDBACK") or "ACTUAL").upper() != "COMMANDED",
@@ -215,6 +230,12 @@ class Settings:
             filters=_filters(parsed),
             message_pins=message_pins,
             problems=problems,
+            allowed_hosts=tuple(
+                word.lower()
+                for word in (display("WEB_ALLOWED_HOSTS") or "").replace(",", " ").split()
+            ),
+            job_history_file=ini_path(history, folder),
+            tool_sensor=_tool_sensor(parsed, problems),
         )
 
     def page_config(self) -> dict[str, Any]:
@@ -236,10 +257,83 @@ class Settings:
                 "spindle_max": self.max_spindle_override,
             },
             "spindle": self.spindle,
+            "units": "mm" if self.units_per_mm == 1.0 else "inch",
+            "program_prefix": str(self.program_prefix) if self.program_prefix else None,
+            "has_tool_table": self.tool_table is not None,
+            "tool_sensor": self.tool_sensor,
             "is_lathe": self.is_lathe,
             "macros": self.macros,
             "limits": self.limits,
         }
+
+
+def _jog_range(default: float, low: float, high: float) -> dict[str, float]:
+    """A jog speed slider's range (units per minute): never down to 0, which is no jog
+    (motion refuses a zero jog velocity)."""
+    high = high if high > 0 else max(default, 1.0)
+    low = max(low, high * MIN_JOG_FRACTION)
+    return {"default": min(max(default, low), high), "min": low, "max": high}
+
+
+def _spindle(ini: IniFile) -> tuple[dict[str, float], dict[str, str]]:
+    """The manual spindle controls' range (GUI-013): [DISPLAY] MIN/MAX_SPINDLE_0_SPEED
+    within [SPINDLE_0] MIN/MAX_FORWARD_VELOCITY and MAX_REVERSE_VELOCITY (rpm), and which
+    key set each bound (for the messages)."""
+
+    def value(section: str, key: str) -> float | None:
+        try:
+            found = ini.find(section, key)
+            return None if found is None else abs(float(found))
+        except ValueError:
+            return None
+
+    def lowest(*keys: tuple[str, str]) -> tuple[float, str]:
+        found = [(v, f"[{s}]{k}") for s, k in keys if (v := value(s, k)) is not None]
+        return min(found) if found else (100_000.0, "")
+
+    display_max = (("DISPLAY", "MAX_SPINDLE_0_SPEED"), ("DISPLAY", "MAX_SPINDLE_SPEED"))
+    high, high_key = lowest(*display_max, ("SPINDLE_0", "MAX_FORWARD_VELOCITY"))
+    # LinuxCNC: the reverse maximum is the forward one unless given
+    has_reverse = value("SPINDLE_0", "MAX_REVERSE_VELOCITY") is not None
+    reverse_key = "MAX_REVERSE_VELOCITY" if has_reverse else "MAX_FORWARD_VELOCITY"
+    reverse, reverse_key = lowest(*display_max, ("SPINDLE_0", reverse_key))
+    low_values = [
+        value("DISPLAY", "MIN_SPINDLE_0_SPEED"),
+        value("SPINDLE_0", "MIN_FORWARD_VELOCITY"),
+    ]
+    low = max([v for v in low_values if v is not None], default=0.0)
+    default = value("DISPLAY", "DEFAULT_SPINDLE_0_SPEED") or value(
+        "DISPLAY", "DEFAULT_SPINDLE_SPEED"
+    )
+    spindle = {
+        "increment": value("DISPLAY", "SPINDLE_INCREMENT") or 100.0,
+        "default": min(max(default if default is not None else 500.0, low), high),
+        "min": low,
+        "max": high,
+        "max_reverse": reverse,
+    }
+    return spindle, {"max": high_key, "max_reverse": reverse_key}
+
+
+def _tool_sensor(ini: IniFile, problems: list[str]) -> dict[str, float] | None:
+    """[TOOLSENSOR] (gmoccapy's keys, plus SEARCH_VEL and PROBE_VEL), or None if absent."""
+    if not ini.has_section("TOOLSENSOR"):
+        return None
+    found: dict[str, float] = {}
+    defaults = {"X": None, "Y": None, "Z": None, "MAXPROBE": None, "SEARCH_VEL": 200.0,
+                "PROBE_VEL": 20.0}  # fmt: skip
+    for key, default in defaults.items():
+        entry = ini.entry("TOOLSENSOR", key)
+        try:
+            number = float(entry.value) if entry is not None else default
+        except ValueError:
+            number = None
+        if number is None or not math.isfinite(number):
+            where = f"{entry.file}:{entry.line}" if entry is not None else ini.path
+            problems.append(f"{where}: [TOOLSENSOR]{key} must be a number: tool setter off")
+            return None
+        found[key.lower()] = number
+    return found
 
 
 def _numbered(ini: Any, section: str, prefix: str) -> list[str]:

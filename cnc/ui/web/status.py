@@ -75,15 +75,17 @@ def snapshot(s: Any, settings: Settings) -> dict[str, Any]:
         "g5x": G5X_NAMES.get(s.g5x_index, f"G5x({s.g5x_index})"),
         "gcodes": fmt.g_codes(s.gcodes),
         "mcodes": fmt.m_codes(s.mcodes),
+        # the interpreter's modal F and S: read ahead of the machine, as its G and M codes
         "feed": _number(fmt.item(s.settings, 1), 3),
         "speed": _number(fmt.item(s.settings, 2), 1),
+        # the machine's: tool velocity now (units/min), spindle as motion drives it
         "velocity": _number(float(s.current_vel) * 60, 1),
         "tool": s.tool_in_spindle,
         "tool_offset": _rounded(fmt.pose(s.tool_offset), indexes),
         "feedrate": _number(float(s.feedrate) * 100, 1),
         "rapidrate": _number(float(s.rapidrate) * 100, 1),
         "spindle_override": _number(float(spindle.get("override", 1.0)) * 100, 1),
-        "spindle_speed": _number(spindle.get("speed"), 1),
+        "spindle_speed": _number(abs(float(spindle.get("speed", 0.0))), 1),
         "spindle_direction": spindle.get("direction", 0),
         "is_flood": bool(s.flood),
         "is_mist": bool(s.mist),
@@ -93,6 +95,10 @@ def snapshot(s: Any, settings: Settings) -> dict[str, Any]:
         "is_optional_stop": bool(s.optional_stop),
         "is_block_delete": bool(s.block_delete),
         "is_paused": bool(s.paused) or bool(s.task_paused),
+        # task paused by the program (M0, M1, M60) rather than by the operator (feed hold)
+        "is_program_stop": bool(s.task_paused) and not bool(s.paused),
+        "program_units": {1: "inch", 2: "mm", 3: "cm"}.get(s.program_units, "mm"),
+        "rotation_xy": _number(s.rotation_xy, 4),
         "queued_mdi": s.queued_mdi_commands,
     }
 

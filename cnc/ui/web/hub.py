@@ -1,0 +1,433 @@
+"""The web UI's link to the controller: the status and messages pushed to every page, the
+program's preview and time estimate, program runs, and every request of a page.
+
+``Hub.dispatch(client, request)`` is the one place where a page's requests are handled:
+most are controller commands run in worker threads (``commands.py``), a few are answered in
+the event loop (message dialogs, continuous jog refreshes, editor checks, probing). Stops
+(E-stop, abort, the end of a jog) go to worker threads of their own, so they never queue
+behind a long MDI line; nothing else in the server's process does long work (previews and
+estimates run in processes of their own, ``jobs.py``), so a stop is passed on at once.
+
+Continuous jogs are leased: a page that starts one re-sends ``{"cmd": "jog", "action":
+"hold"}`` while the key or button is held (every ``JOG_HOLD_S``); the hub stops a jog whose
+page has not held it for ``JOG_LEASE_S``, and every jog of a page that disconnects, so a
+page that hangs, loses its network or is closed never leaves the machine jogging.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import sys
+import time
+import traceback
+from collections.abc import Awaitable, Callable
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import cnc
+from cnc.ui.controller import Controller
+from cnc.ui.formatting import MESSAGE_KINDS
+from cnc.ui.web import probing
+from cnc.ui.web.commands import CommandError, Commands
+from cnc.ui.web.job import JobTracker
+from cnc.ui.web.jobs import ProgramJobs
+from cnc.ui.web.messages import UserMessages
+from cnc.ui.web.notices import Notices
+from cnc.ui.web.settings import Settings
+from cnc.ui.web.status import DISCONNECTED, diff, snapshot
+from hal.core import HalError
+
+WORKERS = 8  # commands waiting for the controller at once
+URGENT_WORKERS = 2  # for stops, which must never queue behind long MDI lines
+JOG_HOLD_S = 0.1  # how often a page re-sends "hold" while a continuous jog is held
+JOG_LEASE_S = 0.3  # a continuous jog not held for this long is stopped
+JOG_CHECK_S = 0.05
+PROBE_TIMEOUT_S = 600.0  # one probing step (a slow search may take minutes)
+# Commands that go through even when the status says the controller is offline: they must
+# never wait for a status poll to notice that it is back.
+ALWAYS_SENT = ("estop", "abort")
+
+
+@dataclass(eq=False)
+class Client:
+    """One connected page."""
+
+    socket: Any  # web.WebSocketResponse (or anything with send_str, closed)
+    is_control: bool
+    jogs: dict[int, float] = field(default_factory=dict)  # joint -> last held (monotonic)
+    jog_lock: asyncio.Lock = field(default_factory=asyncio.Lock)  # jogs run in order
+
+
+def is_urgent(request: dict[str, Any]) -> bool:
+    """Whether a command stops something: E-stop, abort, the end of a jog."""
+    name = request.get("cmd")
+    return name in ("abort", "estop") or (name == "jog" and request.get("action") == "stop")
+
+
+async def send(client: Client, text: str) -> None:
+    """Send to a page; a page that went away is dropped, never an error of the server."""
+    if client.socket.closed:
+        return
+    with contextlib.suppress(ConnectionError, RuntimeError):
+        await client.socket.send_str(text)
+
+
+@dataclass
+class ProbeState:
+    """The probing helper running or last run, as every page shows it."""
+
+    kind: str = ""
+    steps: list[str] = field(default_factory=list)
+    current: int = -1
+    state: str = "idle"  # running, done, failed
+    message: str = ""
+    result: dict[str, Any] | None = None
+
+    def message_for_pages(self) -> dict[str, Any]:
+        return {"type": "probe", **self.__dict__}
+
+
+class Hub:
+    """The controller's status and messages, pushed to every connected page."""
+
+    def __init__(self, settings: Settings, source: str | None) -> None:
+        self.settings = settings
+        self.controller = Controller(source)
+        self.commands = Commands(settings, source)
+        self.executor = ThreadPoolExecutor(WORKERS, thread_name_prefix="cnc-web")
+        self.urgent_executor = ThreadPoolExecutor(URGENT_WORKERS, thread_name_prefix="cnc-stop")
+        self.clients: set[Client] = set()
+        self.status: dict[str, Any] = dict(DISCONNECTED)
+        self.notices = Notices()
+        self.jobs = ProgramJobs(settings)
+        self.tracker = JobTracker(settings.job_history_file)
+        self.probe = ProbeState()
+        self.tool_setter_reference_z: float | None = None  # see probing.py (kept in memory)
+        self.messages = UserMessages(settings.message_pins)  # [DISPLAY] MESSAGE_* dialogs
+        self.problems = list(settings.problems)  # shown to every page that connects
+        self._loops: list[asyncio.Task[None]] = []
+        self._tasks: set[asyncio.Task[Any]] = set()
+        self._position: list[float] | None = None  # machine position of the last poll
+        self.handlers: dict[str, Callable[[Client, dict[str, Any]], Awaitable[dict[str, Any]]]]
+        self.handlers = {
+            "answer": self._answer_dialog,
+            "jog": self._jog,
+            "check_program": self._check_program,
+            "probe": self._start_probe,
+            "probe_confirm": self._confirm_probe,
+        }
+
+    # ---------------------------------------------------------------- status
+    def poll(self) -> list[dict[str, Any]]:
+        """Read status and messages once; the messages for the pages (status diff first)."""
+        now = time.monotonic()
+        try:
+            stat = self.controller.poll()
+            new = snapshot(stat, self.settings)
+            self._position = list(stat.position)
+            messages = self.controller.read_messages()
+        except cnc.error:
+            self.controller.reset()  # the next poll finds a restarted controller
+            new, messages = dict(DISCONNECTED), []
+        notices: list[dict[str, Any]] = []
+        for message in messages:
+            kind = MESSAGE_KINDS.get(message.kind, "text")
+            if kind == "error":
+                self.tracker.note_error()
+            notices += self.notices.add(kind, message.text, now)
+        notices += self.notices.due(now)
+        job, job_messages = self.tracker.update(new, self.jobs.current, now)
+        new["job"] = job
+        outgoing = []
+        changed = diff(self.status, new)
+        if changed:
+            self.status.update(changed)
+            outgoing.append({"type": "status", "data": changed})
+        return outgoing + notices + job_messages + self.messages.poll()
+
+    async def _poll_forever(self) -> None:
+        """Poll every cycle_time_s, on a fixed schedule (a late cycle does not shift the
+        next ones; cycles missed altogether are skipped)."""
+        loop = asyncio.get_running_loop()
+        period = self.settings.cycle_time_s
+        due = loop.time()
+        while True:
+            try:
+                for message in self.poll():
+                    await self.broadcast(message)
+                await self._follow_program()
+            except Exception:  # a bug must not end the status: said, and on with it
+                traceback.print_exc(file=sys.stderr)
+            due = max(due + period, loop.time())
+            await asyncio.sleep(due - loop.time())
+
+    async def _follow_program(self) -> None:
+        """Analyse the program task has open when it changes; tell the pages what the
+        analysis found since the last look."""
+        if not self.status.get("is_connected"):
+            return
+        file = self.status.get("file") or ""
+        if self.jobs.needs_analysis(file):
+            await self.jobs.analyse(file, self._position)
+        # (in a worker thread: a finished estimate of a long program is megabytes to load)
+        state = await asyncio.get_running_loop().run_in_executor(self.executor, self.jobs.poll)
+        if state is not None:
+            await self.broadcast({"type": "program", **self.program_state(state)})
+
+    def program_state(self, state: dict[str, Any]) -> dict[str, Any]:
+        """An analysis state with the program's name within PROGRAM_PREFIX (None if it is
+        elsewhere), which the page's file list selects."""
+        prefix = self.settings.program_prefix
+        name = None
+        if prefix is not None and state["file"]:
+            with contextlib.suppress(ValueError):
+                name = Path(state["file"]).resolve().relative_to(prefix.resolve()).as_posix()
+        return state | {"name_in_prefix": name}
+
+    async def _watch_jogs(self) -> None:
+        """Stop the continuous jogs their pages stopped holding."""
+        while True:
+            await asyncio.sleep(JOG_CHECK_S)
+            now = time.monotonic()
+            for client in list(self.clients):
+                for joint, held in list(client.jogs.items()):
+                    if now - held > JOG_LEASE_S:
+                        self.keep(asyncio.create_task(self._stop_jog(client, joint)))
+
+    async def broadcast(self, message: dict[str, Any]) -> None:
+        text = json.dumps(message)
+        for client in list(self.clients):
+            await send(client, text)
+
+    async def start(self, _app: Any = None) -> None:
+        if self.messages.pins:
+            try:
+                self.messages.open()
+            except HalError as exc:
+                self.problems.append(f"[DISPLAY] MESSAGE_* pins not created: {exc}")
+        for problem in self.problems:
+            print(f"cnc ui web: {problem}", file=sys.stderr, flush=True)
+        self._loops = [
+            asyncio.create_task(self._poll_forever()),
+            asyncio.create_task(self._watch_jogs()),
+        ]
+
+    async def stop(self, _app: Any = None) -> None:
+        for loop in self._loops:
+            loop.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await loop
+        self.commands.is_stopping.set()
+        for client in list(self.clients):
+            await client.socket.close()
+        for executor in (self.executor, self.urgent_executor):
+            executor.shutdown(wait=False, cancel_futures=True)
+        await self.jobs.close()
+        self.controller.close()
+        self.messages.close()
+
+    # ---------------------------------------------------------------- requests
+    async def dispatch(self, client: Client, request: dict[str, Any]) -> dict[str, Any] | None:
+        """Run one request of a page; the result message (None for a request without
+        "id" that went well: jog holds are sent ten times a second)."""
+        answer: dict[str, Any] = {"type": "result", "id": request.get("id")}
+        if not client.is_control:
+            return answer | {"status": "ERROR", "message": "read-only access: command refused"}
+        name = request.get("cmd")
+        handler = self.handlers.get(name) if isinstance(name, str) else None
+        if handler is not None:
+            outcome = await handler(client, request)
+        elif not self.status.get("is_connected") and name not in ALWAYS_SENT:
+            outcome = {
+                "status": "ERROR",
+                "message": f"{name}: refused, the controller is offline (not running)",
+            }
+        else:
+            if name == "run" and isinstance(request.get("line", 0), int):
+                self.tracker.expect_start(request.get("line", 0), time.monotonic())
+            outcome = await self._execute(request)
+        if name in ("mdi", "macro"):
+            await self.broadcast({"type": "history", "lines": list(self.commands.mdi_history)})
+        if "id" not in request and outcome.get("status") == "DONE":
+            return None
+        return answer | outcome
+
+    async def _execute(self, request: dict[str, Any]) -> dict[str, Any]:
+        loop = asyncio.get_running_loop()
+        executor = self.urgent_executor if is_urgent(request) else self.executor
+        try:
+            message = await loop.run_in_executor(executor, self.commands.run, request)
+        except CommandError as exc:
+            return {"status": "ERROR", "message": str(exc), "is_reported": exc.is_reported}
+        return {"status": "DONE", "message": message}
+
+    async def _answer_dialog(self, client: Client, request: dict[str, Any]) -> dict[str, Any]:
+        """{"cmd": "answer", "name": pin name, "is_yes": bool}: close the dialog everywhere."""
+        try:
+            closing = self.messages.answer(request.get("name"), request.get("is_yes"))
+        except ValueError as exc:
+            return {"status": "ERROR", "message": f"answer: {exc}"}
+        await self.broadcast(closing)
+        return {"status": "DONE", "message": "DONE"}
+
+    # ---------------------------------------------------------------- jogs
+    async def _jog(self, client: Client, request: dict[str, Any]) -> dict[str, Any]:
+        """Jogs: "hold" refreshes a continuous jog's lease here; the others go to the
+        controller, in the order the page sent them (a stop never overtakes its start)."""
+        action = request.get("action")
+        try:
+            joint = self.commands.joint_of(request)
+        except CommandError as exc:
+            return {"status": "ERROR", "message": f"jog: {exc}"}
+        if action == "hold":
+            if joint in client.jogs:
+                client.jogs[joint] = time.monotonic()
+                return {"status": "DONE", "message": "DONE"}
+            return {"status": "ERROR", "message": "jog: no continuous jog to hold"}
+        if not self.status.get("is_connected") and action != "stop":
+            return {"status": "ERROR", "message": "jog: refused, the controller is offline"}
+        async with client.jog_lock:
+            if action == "start":
+                client.jogs[joint] = time.monotonic()
+            elif action == "stop":
+                client.jogs.pop(joint, None)
+            outcome = await self._execute(request)
+            if action == "start" and outcome["status"] != "DONE":
+                client.jogs.pop(joint, None)
+        return outcome
+
+    async def _stop_jog(self, client: Client, joint: int) -> None:
+        if client.jogs.pop(joint, None) is None:
+            return  # stopped already
+        async with client.jog_lock:
+            await self._execute({"cmd": "jog", "action": "stop", "joint": joint})
+        if not client.socket.closed:
+            text = "jog stopped: the page stopped holding it (a key or button released late?)"
+            await send(client, json.dumps({"type": "notice", "kind": "error", "text": text}))
+
+    async def disconnected(self, client: Client) -> None:
+        self.clients.discard(client)
+        for joint in sorted(client.jogs):
+            await self._stop_jog(client, joint)
+
+    # ---------------------------------------------------------------- editor
+    async def _check_program(self, client: Client, request: dict[str, Any]) -> dict[str, Any]:
+        """{"cmd": "check_program", "text": ...}: the preview interpreter's errors."""
+        text = request.get("text")
+        if not isinstance(text, str):
+            return {"status": "ERROR", "message": "check_program: 'text' must be a text"}
+        try:
+            found = await self.jobs.check(text)
+        except RuntimeError as exc:
+            return {"status": "ERROR", "message": f"check_program: {exc}"}
+        return {"status": "DONE", "message": "DONE", "errors": found["errors"],
+                "points": found["points"]}  # fmt: skip
+
+    # ---------------------------------------------------------------- probing
+    async def _start_probe(self, client: Client, request: dict[str, Any]) -> dict[str, Any]:
+        """{"cmd": "probe", "kind": ..., "params": {...}}: a probing helper, run step by
+        step in a worker thread; every page sees its steps ("probe" messages)."""
+        if self.probe.state == "running":
+            return {"status": "ERROR", "message": "probe: a probing helper runs already"}
+        if not self.status.get("is_connected"):
+            return {"status": "ERROR", "message": "probe: refused, the controller is offline"}
+        params = request.get("params", {})
+        loop = asyncio.get_running_loop()
+        try:
+            scale = await loop.run_in_executor(self.executor, self.commands.program_scale)
+            plan = probing.make_plan(
+                str(request.get("kind")), params if isinstance(params, dict) else {}, scale,
+                self.settings.tool_sensor,
+            )  # fmt: skip
+        except (probing.ProbeError, cnc.error) as exc:
+            return {"status": "ERROR", "message": f"probe: {exc}"}
+        plan.is_incremental = "G91" in str(self.status.get("gcodes", "")).split()
+        self.probe = ProbeState(plan.kind, [step.text for step in plan.steps], 0, "running")
+        await self.broadcast(self.probe.message_for_pages())
+        self.keep(asyncio.create_task(self._run_probe(plan, loop)))
+        return {"status": "DONE", "message": "started"}
+
+    async def _run_probe(self, plan: probing.ProbePlan, loop: asyncio.AbstractEventLoop) -> None:
+        def report(index: int) -> None:
+            self.probe.current = index
+            loop.call_soon_threadsafe(
+                lambda: self.keep(
+                    asyncio.create_task(self.broadcast(self.probe.message_for_pages()))
+                )
+            )
+
+        def mdi(line: str) -> None:
+            self.commands.run({"cmd": "mdi_line", "text": line, "timeout": PROBE_TIMEOUT_S})
+
+        def status() -> Any:
+            return self.commands.stat
+
+        try:
+            result = await loop.run_in_executor(
+                self.executor, probing.run_plan, plan, mdi, status, report
+            )
+        except (CommandError, probing.ProbeError, cnc.error) as exc:
+            self.probe.state, self.probe.message = "failed", str(exc)
+        else:
+            self.probe.state, self.probe.result = "done", result
+            self.probe.current = len(plan.steps)
+        await self.broadcast(self.probe.message_for_pages())
+
+    async def _confirm_probe(self, client: Client, request: dict[str, Any]) -> dict[str, Any]:
+        """{"cmd": "probe_confirm", "system": "G54", "values": {"X": 0}} (a position),
+        {"tool": n} or {"is_reference": true} (a tool length): set what was probed."""
+        result = self.probe.result
+        if self.probe.state != "done" or result is None:
+            return {"status": "ERROR", "message": "probe_confirm: nothing probed to confirm"}
+        if result["kind"] == "tool_length" and request.get("is_reference"):
+            self.tool_setter_reference_z = result["touch_z"]
+            self.probe.state = "confirmed"
+            await self.broadcast(self.probe.message_for_pages())
+            return {"status": "DONE", "message": "reference kept"}
+        loop = asyncio.get_running_loop()
+
+        def set_it() -> None:
+            stat = self.commands.stat
+            scale = self.commands.program_scale()
+            reference = self.tool_setter_reference_z
+            for line in probing.confirm_lines(result, request, stat, scale, reference):
+                self.commands.run({"cmd": "mdi_line", "text": line})
+
+        try:
+            await loop.run_in_executor(self.executor, set_it)
+        except (CommandError, probing.ProbeError, cnc.error) as exc:
+            return {"status": "ERROR", "message": f"probe_confirm: {exc}"}
+        self.probe.state = "confirmed"
+        await self.broadcast(self.probe.message_for_pages())
+        return {"status": "DONE", "message": "DONE"}
+
+    # ---------------------------------------------------------------- helpers
+    def keep(self, task: asyncio.Task[Any]) -> None:
+        """Hold a reference to a task until it is done (else it may be collected)."""
+        self._tasks.add(task)
+        task.add_done_callback(self._tasks.discard)
+
+    def page_config(self, client_is_control: bool) -> dict[str, Any]:
+        return self.settings.page_config() | {
+            "is_control": client_is_control,
+            "mdi_history": list(self.commands.mdi_history),
+            "jog_hold_s": JOG_HOLD_S,
+        }
+
+    def greeting(self, client: Client) -> list[dict[str, Any]]:
+        """What a page gets when it connects."""
+        found: list[dict[str, Any]] = [
+            {"type": "config", "data": self.page_config(client.is_control)},
+            {"type": "status", "data": self.status},
+            {"type": "jobs", "jobs": self.tracker.history},
+        ]
+        if self.jobs.current is not None:
+            found.append({"type": "program", **self.program_state(self.jobs.current.state())})
+        if self.probe.state != "idle":
+            found.append(self.probe.message_for_pages())
+        found += [{"type": "notice", "kind": "error", "text": text} for text in self.problems]
+        return found + self.messages.open_dialogs()
