@@ -427,3 +427,22 @@ async def test_page_commands_become_these_task_commands(
         await socket.send_json(request_fields | {"id": 1})
         assert (await receive_until(socket, is_result(1)))["status"] == "DONE"
     assert [without_serial(task.next_command()) for _ in expected] == expected
+
+
+async def test_commands_of_one_kind_reach_the_task_in_the_order_the_page_sent_them(
+    fake_task, web
+) -> None:
+    """A slider dragged to 40 % and reset to 100 % at once must end at 100 %: the server's
+    worker threads may not swap two commands of one kind from one page."""
+    task = fake_task()
+    client = await web()
+    percents = [40, 100, 55, 100, 70, 100]
+    async with client.ws_connect("/ws") as socket:
+        for number, percent in enumerate(percents, 1):
+            await socket.send_json({"cmd": "feedrate", "percent": percent, "id": number})
+        for number in range(1, len(percents) + 1):
+            assert (await receive_until(socket, is_result(number)))["status"] == "DONE"
+    sent = [await asyncio.to_thread(task.next_command) for _ in percents]
+    assert [without_serial(c) for c in sent] == [
+        ("EMC_TRAJ_SET_SCALE", {"scale": percent / 100}) for percent in percents
+    ]

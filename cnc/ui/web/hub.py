@@ -60,6 +60,13 @@ class Client:
     is_control: bool
     jogs: dict[int, float] = field(default_factory=dict)  # joint -> last held (monotonic)
     jog_lock: asyncio.Lock = field(default_factory=asyncio.Lock)  # jogs run in order
+    # Commands of one kind from one page run in the order it sent them (a slider's 40 %
+    # then its reset to 100 % must not be swapped by the worker threads); kinds differ
+    # freely (an override while a long MDI line runs), stops are never held.
+    order_locks: dict[str, asyncio.Lock] = field(default_factory=dict)
+
+    def order_lock(self, name: str) -> asyncio.Lock:
+        return self.order_locks.setdefault(name, asyncio.Lock())
 
 
 def is_urgent(request: dict[str, Any]) -> bool:
@@ -249,7 +256,11 @@ class Hub:
         else:
             if name == "run" and isinstance(request.get("line", 0), int):
                 self.tracker.expect_start(request.get("line", 0), time.monotonic())
-            outcome = await self._execute(request)
+            if is_urgent(request):
+                outcome = await self._execute(request)
+            else:
+                async with client.order_lock(str(name)):
+                    outcome = await self._execute(request)
         if name in ("mdi", "macro"):
             await self.broadcast({"type": "history", "lines": list(self.commands.mdi_history)})
         if "id" not in request and outcome.get("status") == "DONE":

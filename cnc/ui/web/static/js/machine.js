@@ -286,18 +286,23 @@ $("flood").onclick = () => send("flood", { on: !state.status.is_flood });
 $("mist").onclick = () => send("mist", { on: !state.status.is_mist });
 
 // ------------------------------------------------------------------ overrides
+const overrideTimers = {};  // slider id -> the send waiting for the slider to rest
 function setRange(id, min, max) {
   const slider = $(id);
   slider.min = min; slider.max = max;
-  let timer = null;
   slider.oninput = () => {
     $(`${id}-value`).textContent = `${slider.value}%`;
-    clearTimeout(timer);  // sent once the slider rests for a moment
-    timer = setTimeout(() => send(id.replace("-", "_"), { percent: Number(slider.value) }), 120);
+    clearTimeout(overrideTimers[id]);  // sent once the slider rests for a moment
+    overrideTimers[id] = setTimeout(
+      () => send(id.replace("-", "_"), { percent: Number(slider.value) }), 120);
   };
 }
 document.querySelectorAll("[data-reset]").forEach((button) => {
-  button.onclick = () => send(button.dataset.reset.replace("-", "_"), { percent: 100 });
+  const id = button.dataset.reset;
+  button.onclick = () => {
+    clearTimeout(overrideTimers[id]);  // a drag's value still to be sent must not undo it
+    send(id.replace("-", "_"), { percent: 100 });
+  };
 });
 
 function showOverride(id, value) {
