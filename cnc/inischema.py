@@ -13,7 +13,7 @@ table and the ``.var`` parameter file it names (``check_tool_table``,
 ``check_parameter_file``), so a machine that cannot run never starts a process.
 
 Adding a key is one line in its section, e.g. ``real("HEARTBEAT_TIMEOUT", 0.5, above=0,
-high=10)`` in ``[EMCMOT]``; a process then reads ``config.value("EMCMOT",
+high=60)`` in ``[EMCMOT]``; a process then reads ``config.value("EMCMOT",
 "HEARTBEAT_TIMEOUT")``, ``config`` being ``load_config(path)`` or ``read_config(ini)``.
 Kinds: ``real`` (a finite number), ``integer`` (decimal or 0x hex), ``flag`` (1/0, yes/no,
 true/false), ``text``, ``path`` (a file named relative to the INI file's folder),
@@ -389,7 +389,7 @@ _SECTIONS = [
         real("COMM_TIMEOUT", 1.0, above=0),
         real("COMM_WAIT", low=0),
         text("SHMEM_KEY"),
-        real("HEARTBEAT_TIMEOUT", 0.5, above=0, high=10),  # ours: motion's (motion/safety.py)
+        real("HEARTBEAT_TIMEOUT", 0.5, above=0, high=60),  # ours: motion's (motion/safety.py)
     ]),
     Section("TASK", [
         text("TASK"),
@@ -397,7 +397,7 @@ _SECTIONS = [
         integer("INTERP_MAX_LEN", 1000, above=0),
         integer("MDI_QUEUED_COMMANDS", 10, above=0),
         text("IO_ERROR"),
-        real("HEARTBEAT_TIMEOUT", 1.0, above=0, high=10),  # ours: task's (nml/safety.py)
+        real("HEARTBEAT_TIMEOUT", 1.0, above=0, high=60),  # ours: task's (nml/safety.py)
         real("INTERP_TIMEOUT", 10.0, low=0),  # ours: seconds without motion (0: never)
     ]),
     Section("HAL", [
@@ -413,7 +413,7 @@ _SECTIONS = [
     Section("HALUI", [
         Key("MDI_COMMAND", TEXT, max_count=MAX_MDI_COMMANDS, max_bytes=MDI_COMMAND_BYTES),
         real("CYCLE_TIME", 0.02, above=0, high=1.0),  # ours: LinuxCNC's halui polls every 20 ms
-        real("HEARTBEAT_TIMEOUT", 1.0, above=0, high=10),  # ours (nml/safety.py)
+        real("HEARTBEAT_TIMEOUT", 1.0, above=0, high=60),  # ours (nml/safety.py)
     ]),
     Section("APPLICATIONS", [real("DELAY", 0.0, low=0), text("APP", repeat=True)], is_open=True),
     Section("TRAJ", [
@@ -506,7 +506,7 @@ _SECTIONS = [
         flag("TOOL_CHANGE_QUILL_UP"),
         flag("TOOL_CHANGE_AT_G30"),
         flag("RANDOM_TOOLCHANGER"),
-        real("HEARTBEAT_TIMEOUT", 1.0, above=0, high=10),  # ours (nml/safety.py)
+        real("HEARTBEAT_TIMEOUT", 1.0, above=0, high=60),  # ours (nml/safety.py)
     ]),
 ]  # fmt: skip
 SCHEMA: dict[str, Section] = {section.name: section for section in _SECTIONS}

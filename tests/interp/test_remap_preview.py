@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from cnc.ini import IniFile
-from cnc.ui.web.preview import preview
+from cnc.ui.web.preview import decode, preview
 from task.interp.python import gcode
 
 INI = """\
@@ -74,13 +74,15 @@ def config(tmp_path: Path, monkeypatch) -> Path:
 
 
 def test_the_web_preview_runs_remapped_codes_and_their_python(config: Path) -> None:
+    chunks: list[bytes] = []
     result = preview(
         str(config / "prog.ngc"),
+        chunks.append,
         tool_table=str(config / "tool.tbl"),
         ini=IniFile.load(config / "test.ini"),
     )
     assert result["error"] is None
-    ends = [tuple(point[:2]) for point in result["points"]]
+    ends = [tuple(point[:2]) for point in decode(b"".join(chunks))]
     # the procedure's move to pocket 2, the preview branch of M450, M451's Python, the end
     assert ends[-4:] == [(40.0, 50.0), (7.0, 50.0), (7.0, 7.0), (1.0, 1.0)]
     assert "remap" not in sys.modules  # the plug-in's modules are gone with it

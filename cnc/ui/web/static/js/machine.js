@@ -301,6 +301,9 @@ document.querySelectorAll("[data-reset]").forEach((button) => {
   const id = button.dataset.reset;
   button.onclick = () => {
     clearTimeout(overrideTimers[id]);  // a drag's value still to be sent must not undo it
+    // shown at once: if the drag's value was never sent, no status change will show it
+    $(id).value = 100;
+    $(`${id}-value`).textContent = "100%";
     send(id.replace("-", "_"), { percent: 100 });
   };
 });
