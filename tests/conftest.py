@@ -98,13 +98,6 @@ def pytest_configure(config: pytest.Config) -> None:
     config.addinivalue_line("markers", "allow_leftovers: the test checks cleanup itself")
 
 
-def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
-    """Slow tests (whole machines, browsers) first, the rest in their order: run in
-    parallel, the long ones then overlap the many short ones instead of ending the run
-    alone on one core."""
-    items.sort(key=lambda item: item.get_closest_marker("slow") is None)
-
-
 @pytest.fixture
 def collector_off() -> Iterator[None]:
     """The realtime host's setting (hal/README.md): the garbage collector does not run, so

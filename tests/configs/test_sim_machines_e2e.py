@@ -22,8 +22,6 @@ from cnc.runtime import read_runtime_info
 from nml.ipcnames import instance_objects
 from tests.hal.halrun_util import REPO
 
-pytestmark = pytest.mark.slow  # whole machines (run first: see tests/conftest.py)
-
 # config -> (MDI lines after homing, expected work position of the axes it names, tool)
 MACHINES = {
     "mill": (["G0 X10 Y-5 Z-2", "T2 M6", "G43 G0 Z-2"], {"X": 10.0, "Y": -5.0, "Z": -2.0}, 2),

@@ -24,8 +24,6 @@ from cnc.runtime import read_runtime_info
 from nml.channels import DEFAULT_NML_FILE
 from nml.ipcnames import instance_objects, remove_instance_objects
 
-pytestmark = pytest.mark.slow  # whole machines (run first: see tests/conftest.py)
-
 MACHINE = Path(__file__).with_name("machine")
 
 

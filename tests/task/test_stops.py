@@ -13,8 +13,6 @@ import pytest
 import cnc
 from tests.task.test_machine import Machine
 
-pytestmark = pytest.mark.slow  # whole machines (run first: see tests/conftest.py)
-
 
 def spindle_and_coolant_on(machine: Machine) -> None:
     c = machine.command

@@ -11,8 +11,6 @@ import pytest
 import cnc
 from tests.task.test_machine import Machine
 
-pytestmark = pytest.mark.slow  # whole machines (run first: see tests/conftest.py)
-
 
 def mdi(machine: Machine, *lines: str) -> None:
     for line in lines:
