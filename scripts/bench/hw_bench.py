@@ -24,6 +24,7 @@ Prints one JSON object:
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import shutil
@@ -200,13 +201,16 @@ def main() -> int:
     parser.add_argument("--no-lcnc", action="store_true", help="skip LinuxCNC's hm2_eth")
     args = parser.parse_args()
     os.environ.setdefault(INSTANCE_ENV, f"hwbench{os.getpid()}")
-    result: dict[str, Any] = {"hm2": measure_hm2(args.seconds)}
-    if not args.no_lcnc:
-        result["hm2_lcnc"] = measure_hm2_lcnc(args.seconds)
-    with tempfile.TemporaryDirectory() as folder:
-        result["modbus"] = {
-            str(baud): measure_modbus(baud, args.seconds / 2, folder) for baud in (115200, 19200)
-        }
+    # the drivers' messages (loading, boards found) go to stderr: stdout is the JSON alone
+    with contextlib.redirect_stdout(sys.stderr):
+        result: dict[str, Any] = {"hm2": measure_hm2(args.seconds)}
+        if not args.no_lcnc:
+            result["hm2_lcnc"] = measure_hm2_lcnc(args.seconds)
+        with tempfile.TemporaryDirectory() as folder:
+            result["modbus"] = {
+                str(baud): measure_modbus(baud, args.seconds / 2, folder)
+                for baud in (115200, 19200)
+            }
     print(json.dumps(result, indent=2))
     return 0
 
