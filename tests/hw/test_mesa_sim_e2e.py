@@ -112,6 +112,12 @@ def machine(procs, tmp_path: Path, cnc_instance: str) -> Iterator[Machine]:
     hal = Hal()  # the machine's HAL, for get() (attached once the machine runs)
     hal_api.set_shared_hal(hal)
     try:
+        # the VFD's link comes up a moment after the machine (hy_vfd is a program of its
+        # own): before it does, its spindle fault refuses "machine on", as in LinuxCNC
+        wait_for(
+            lambda: get("spindle-vfd.hycomm-ok") and not get("spindle.0.amp-fault-in"),
+            "the VFD link up",
+        )
         yield Machine(folder, launcher)
     finally:
         hal_api.set_shared_hal(None)

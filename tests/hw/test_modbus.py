@@ -245,8 +245,12 @@ def test_mb2hal_says_when_its_port_is_missing(tmp_path: Path, hal: Hal) -> None:
     thread = threading.Thread(target=bridge.run, daemon=True)
     thread.start()
     try:
-        wait_for(lambda: pin(hal, "mb2hal.drive.num_errors") > 0, "the port error")
-        assert any("cannot open" in f and "no-such-tty" in f and "[-13]" in f for f in faults)
+        # (the counter may move before the message is told: wait for the message)
+        wait_for(
+            lambda: any("cannot open" in f and "no-such-tty" in f and "[-13]" in f for f in faults),
+            "the port error",
+        )
+        assert pin(hal, "mb2hal.drive.num_errors") > 0
     finally:
         bridge.is_stopping = True
         thread.join(3)
