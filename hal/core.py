@@ -58,7 +58,9 @@ META_BYTES = 16 << 20
 LOCK_TIMEOUT_S = 5.0
 
 _COMPLIANT = re.compile(r"^[a-z0-9.-]+$")
-_ALLOWED = re.compile(r"^[A-Za-z0-9_.\-:#\[\]]+$")
+# Any printable character but blanks, as LinuxCNC (which checks only the length): pyvcp
+# panels name pins "jog-x+", and halcmd splits words at blanks
+_ALLOWED = re.compile(r"^[!-~]+$")
 
 
 class HalError(Exception):

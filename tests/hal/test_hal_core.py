@@ -39,6 +39,16 @@ def test_name_longer_than_47_characters_is_refused(hal: Hal) -> None:
         hal.new_signal("s" * 48, HAL_BIT)
 
 
+def test_names_take_any_printable_character_but_blanks(hal: Hal) -> None:
+    """As LinuxCNC, which checks only the length: pyvcp panels make pins like "jog-x+"."""
+    hal.new_component("c")
+    hal.new_pin("c", "pyvcp.jog-x+", HAL_BIT, HAL_IN)
+    hal.new_signal("x=1/2", HAL_BIT)
+    for bad in ("two words", "tab\there", "é"):
+        with pytest.raises(HalError, match="invalid characters"):
+            hal.new_pin("c", bad, HAL_BIT, HAL_IN)
+
+
 def test_naming_rules_are_checked() -> None:
     assert is_compliant_name("pid.0.p-gain")
     assert not is_compliant_name("pid.0.Pgain")
