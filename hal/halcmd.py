@@ -42,6 +42,7 @@ from hal.core import (
     parse_value,
     release_hal_mutex,
 )
+from hal.hallib import find_halfile  # LinuxCNC's HAL file search (the INI's folder, LIB:)
 from hal.rtapi_app import HostClient, purge_dead_components, release_if_unused
 from nml.shmem import is_process_alive
 
@@ -985,23 +986,6 @@ def run_session(session: HalCmd, opts: dict[str, Any], words: list[str]) -> int:
     return 1 if failures else 0
 
 
-def resolve_halfile(value: str, ini_dir: Path) -> Path:
-    """Where a ``[HAL]HALFILE`` value points: absolute, next to the INI file, or ``LIB:``."""
-    library = Path(__file__).resolve().parent / "lib"
-    if value.startswith("LIB:"):
-        path = library / value[4:]
-    else:
-        path = Path(value).expanduser()
-        if not path.is_absolute():
-            # next to the INI file, else in the HAL library (LinuxCNC's hallib)
-            path = ini_dir / path if (ini_dir / path).is_file() else library / path
-    if path.suffix == ".tcl":
-        raise HalError(f"HAL file '{value}': Tcl HAL files are not supported")
-    if not path.is_file():
-        raise HalError(f"HAL file '{value}' not found (looked for {path})")
-    return path
-
-
 def run_ini_halfiles(ini_path: str, *, is_postgui: bool = False, **kwargs: Any) -> int:
     """Run an INI file's ``[HAL]HALFILE`` entries in order, then its ``[HAL]HALCMD`` lines,
     as LinuxCNC's launcher does (``POSTGUI_HALFILE`` entries when ``is_postgui``).
@@ -1018,7 +1002,9 @@ def run_ini_halfiles(ini_path: str, *, is_postgui: bool = False, **kwargs: Any) 
         key = "POSTGUI_HALFILE" if is_postgui else "HALFILE"
         for value in ini.findall("HAL", key):
             try:
-                path = resolve_halfile(value, Path(ini_path).resolve().parent)
+                path = find_halfile(value, Path(ini_path).resolve().parent).path
+                if path.suffix == ".tcl":
+                    raise HalError(f"HAL file '{value}': Tcl HAL files are not supported")
             except HalError as exc:
                 session.where = f"{ini_path}: [HAL]{key}"
                 session.error(str(exc))

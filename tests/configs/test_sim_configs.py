@@ -23,7 +23,8 @@ import pytest
 from cnc.ini import IniFile
 from hal.api import component
 from hal.core import HAL_IN, Hal
-from hal.halcmd import HalCmd, resolve_halfile, run_ini_halfiles
+from hal.halcmd import HalCmd, run_ini_halfiles
+from hal.hallib import find_halfile
 from iocontrol.controller import PINS as IOCONTROL_PINS
 from iocontrol.tooltable import ToolTable
 from nml import emc
@@ -128,7 +129,7 @@ def test_ini_has_every_key_the_launcher_reads(name: str) -> None:
     halfiles = ini.findall("HAL", "HALFILE")
     assert halfiles
     for value in halfiles:
-        assert resolve_halfile(value, SIM).parent == SIM
+        assert find_halfile(value, SIM).path.parent == SIM
     for section, key in [("EMCIO", "TOOL_TABLE"), ("RS274NGC", "PARAMETER_FILE")]:
         assert (SIM / ini.require(section, key)).is_file()
     for section, key in [("RS274NGC", "SUBROUTINE_PATH"), ("DISPLAY", "PROGRAM_PREFIX")]:
