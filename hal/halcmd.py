@@ -48,7 +48,7 @@ from nml.shmem import is_process_alive
 
 # halcmd's message levels: -Q, -q (default), -v, -V
 VERBOSITY_SILENT, VERBOSITY_ERRORS, VERBOSITY_INFO, VERBOSITY_DEBUG = 0, 1, 2, 3
-USR_READY_TIMEOUT_S = 10.0
+USR_READY_PACIFY_S = 2.0  # LinuxCNC's halcmd says it is still waiting after 2 s
 # LinuxCNC's lock bits: tune = load + config, so setp and start/stop stay allowed
 LOCK_LEVELS = {"none": 0, "load": 1, "config": 2, "params": 4, "run": 8, "tune": 3, "all": 255}
 # halcmd's variable names: letters, digits, '.', '-', '_'; parentheses allow any name
@@ -405,23 +405,32 @@ class HalCmd:
             self.info(f"Component '{comp_name}' ready")
         self.info(f"Program '{args[0]}' started")
 
-    def wait_ready(
-        self,
-        comp_name: str,
-        proc: subprocess.Popen[bytes] | ForkedTool,
-        timeout: float = USR_READY_TIMEOUT_S,
-    ) -> None:
+    def wait_ready(self, comp_name: str, proc: subprocess.Popen[bytes] | ForkedTool) -> None:
         """Until ``proc`` has made component ``comp_name`` ready (``loadusr -W``); HalError
-        if it exits first or ``timeout`` seconds pass."""
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
+        if it exits first. As LinuxCNC's halcmd, no time limit (a loaded machine starts
+        slowly, it must not fail to start): after 2 s it says what it waits for, then a dot
+        a second; Ctrl-C ends the wait."""
+        started = time.monotonic()
+        next_word = started + USR_READY_PACIFY_S
+        is_pacifying = False
+        while True:
             comp = self.hal.meta["comps"].get(comp_name)
             if comp and comp["is_ready"]:
-                return
+                break
             if proc.poll() is not None:
+                if is_pacifying:
+                    print(file=sys.stderr)
                 raise HalError(f"{Path(proc.args[0]).name} exited without becoming ready")
+            now = time.monotonic()
+            if now >= next_word:
+                text = f"Waiting for component '{comp_name}' to become ready"
+                text = "." if is_pacifying else text
+                print(text, end="", file=sys.stderr, flush=True)
+                is_pacifying = True
+                next_word = now + 1.0
             time.sleep(0.01)
-        raise HalError(f"waiting for component '{comp_name}' timed out")
+        if is_pacifying:
+            print(file=sys.stderr)
 
     def do_waitusr(self, args: list[str]) -> None:
         self._need(args, 1, 1, "waitusr name")
