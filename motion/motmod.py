@@ -192,6 +192,8 @@ class Motmod:
         except NmlError as exc:
             raise HalError(f"motmod: cannot connect to the NML buffers: {exc}") from None
         self.status = emc.EMC_MOTION_STAT()
+        self._status_bytes = self.status.byte_view()
+        self._published = b""  # the status record as last written (see _publish)
         self.pending_errors: list[str] = []
         # the safety board: E-stop/abort requests, heartbeats, jog leases (motion/safety.py)
         self.safety = MotionSafety.open(self.controller, period_s, _heartbeat_timeout())
@@ -461,8 +463,13 @@ class Motmod:
             pins.locked = spindle.is_locked
 
     def _publish(self) -> None:
-        with contextlib.suppress(NmlTimeoutError):  # busy this instant: next period publishes
-            self.nml[MOTION_STATUS].write(self.status)
+        # written only when it changed: a machine at rest writes nothing, so task (which
+        # reads it when its change counter moves) and the UIs stay idle too
+        record = self._status_bytes.tobytes()
+        if record != self._published:
+            with contextlib.suppress(NmlTimeoutError):  # busy this instant: next period
+                self.nml[MOTION_STATUS].write(self.status)
+                self._published = record
         errors = self.nml[EMC_ERROR]
         while self.pending_errors:
             try:

@@ -830,6 +830,12 @@ class ShmBuffer:
         self._require_open()
         return self._has_new_data()
 
+    def write_count(self) -> int:
+        """How many messages were ever written here: a status buffer's change counter (the
+        same count, the same status), read without the lock."""
+        self._require_open()
+        return self._get("write_count")
+
     def _has_new_data(self) -> bool:
         if self.is_broadcast and self._slot >= 0:
             return self._get("write_count") > self._slot_get(self._slot, "cursor")

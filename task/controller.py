@@ -73,6 +73,7 @@ READAHEAD = 50  # messages queued ahead of motion while reading a program
 # waits behind them in motion's command buffer (motion takes 2-4 a period), so few keep
 # abort quick: 100 delayed the stop by ~75 ms. Ten a task cycle outrun any program.
 MAX_MOTION_IN_FLIGHT = 10
+PUBLISH_AT_LEAST_S = 0.05  # EMC_STAT's longest age at rest (see cycle)
 BUSY_POLL_S = 0.001  # how often task looks at motion while a program or MDI runs
 # The interpreter's share of a cycle: it reads on in the next cycle, after task has looked
 # at its commands and the safety board again.
@@ -196,6 +197,8 @@ class Task:
         self.watchdog = InterpreterWatchdog(self.safety, self.interp_timeout)
         # the newest safety board requests task has acted on (by the board or a command)
         self.estop_handled = 0
+        self.status_counts: tuple[int, int] | None = None  # (motion's, iocontrol's) last read
+        self.publish_due = 0.0  # EMC_STAT is published again by then, changed or not
         self.abort_handled = 0
         self.outbox = Outbox(nml[EMC_ERROR])  # operator messages: never wait for a reader
         self.stuck_command_writer = 0  # the pid last reported holding emcCommand's lock
@@ -258,9 +261,9 @@ class Task:
         """One pass of the loop: waits for a command at most CYCLE_TIME, or one servo
         period while something runs, so completions are seen (and answered) at once."""
         timeout = self.setup.cycle_time if self.run is Run.IDLE else BUSY_POLL_S
-        self.take_safety_requests()
+        has_news = self.take_safety_requests()
         cmd = self._next_command(timeout)
-        self.refresh()
+        has_news |= self.refresh()
         if cmd is not None:
             self.take_safety_requests()  # (a request older than the command goes first)
             self.handle(cmd)
@@ -273,7 +276,11 @@ class Task:
             self.operator_error(self._internal_error("running the program", exc))
             self._abort()
         self.outbox.flush()
-        self.publish()
+        # at rest nothing changes: published again only when it may have (most of an idle
+        # cycle's cost), and at least every PUBLISH_AT_LEAST_S all the same
+        now = time.monotonic()
+        if has_news or cmd is not None or self.run is not Run.IDLE or now >= self.publish_due:
+            self.publish()
 
     def keep_alive(self) -> None:
         """Beat task's heartbeat in the middle of a long piece of work (reading a large
@@ -281,11 +288,12 @@ class Task:
         if self.safety is not None:
             self.safety.heartbeat.beat()
 
-    def take_safety_requests(self) -> None:
+    def take_safety_requests(self) -> bool:
         """Beat task's heartbeat; act on new E-stop and abort requests of the safety board
-        and report the processes found lost (their E-stop is requested already)."""
+        and report the processes found lost (their E-stop is requested already). True if
+        there was anything to act on."""
         if self.safety is None:
-            return
+            return False
         tick = self.safety.tick()
         for lost in tick.lost:
             self.operator_error(f"E-stop: {lost.reason}")
@@ -295,6 +303,7 @@ class Task:
         if tick.abort is not None and tick.abort.stamp > self.abort_handled:
             self.abort_handled = tick.abort.stamp
             self._abort_command(emc.EMC_TASK_ABORT())
+        return bool(tick.lost) or tick.estop is not None or tick.abort is not None
 
     def _next_command(self, timeout: float) -> emc.NMLmsg | None:
         channel = self.nml[EMC_COMMAND]
@@ -1077,15 +1086,20 @@ class Task:
             self.state = STATE.ESTOP
             self.operator_error("E-stop: the E-stop chain opened (iocontrol.0.emc-enable-in)")
 
-    def refresh(self) -> None:
+    def refresh(self) -> bool:
         """Take motion's and iocontrol's latest status into EMC_STAT (a corrupt one is
-        reported and the last good one kept)."""
+        reported and the last good one kept); True if either changed since last time."""
+        motion_buffer, io_buffer = self.nml[MOTION_STATUS], self.nml[TOOL_STATUS]
         try:
-            motion = self.nml[MOTION_STATUS].peek()
-            io = self.nml[TOOL_STATUS].peek()
+            counts = (motion_buffer.write_count(), io_buffer.write_count())
+            if counts == self.status_counts:
+                return False
+            motion = motion_buffer.peek()
+            io = io_buffer.peek()
         except NmlError as exc:
             self._report_bad_buffer(str(exc))
-            return
+            return False
+        self.status_counts = counts
         if motion is not None:
             self.stat.motion = motion
             # the units are task's (LinuxCNC's emcTrajUpdate fills them in the same way)
@@ -1094,6 +1108,7 @@ class Task:
             traj.angularUnits = self.setup.angular_units
         if io is not None:
             self.stat.io = io
+        return True
 
     def publish(self) -> None:
         task = self.stat.task
@@ -1133,6 +1148,7 @@ class Task:
         task.g5x_index = system
         _store(task.g92_offset, params[5211:5220])
         task.ini_filename = emc.fit_text(self.ini.path)
+        self.publish_due = time.monotonic() + PUBLISH_AT_LEAST_S
         try:
             self.nml[EMC_STATUS].write(self.stat)
         except NmlError as exc:
