@@ -17,7 +17,9 @@ One loop (TASK-001..021), every [TASK]CYCLE_TIME or as soon as a command arrives
 3. execute: send the queued messages in order, to motion (moves go straight into its
    queue) or iocontrol (after motion has finished), or carry them out here (dwell, M0/M1,
    program end, operator messages);
-4. publish EMC_STAT = {task, motion, io}, always right after a command changes something.
+4. publish EMC_STAT = {task, motion, io}, always right after a command changes something,
+   and whenever motion's or iocontrol's status moved or a program runs (at rest, at least
+   every PUBLISH_AT_LEAST_S: a resting machine does not rewrite unchanged status).
 """
 
 from __future__ import annotations
