@@ -274,11 +274,6 @@ def the_machines_spindle_and_coolant_beside_the_modal_state(  # type: ignore[no-
     expect(page.locator("#progress-text")).to_contain_text(re.compile(r"\d+\.\d %.*elapsed.*left"))
     expect(page.locator(".listing-row.current .number")).to_have_text("4")
     page.screenshot(path=str(shots / "state-running.png"))
-    page.keyboard.press("p")  # pause: one word, never "PAUSED (paused)"
-    expect(page.locator("#state")).to_have_text("PAUSED")
-    expect(page.locator("#state-detail")).to_contain_text("Resume to continue")
-    page.keyboard.press("s")
-    expect(page.locator("#state")).to_have_text("RUNNING")
     page.keyboard.press("Escape")  # STOP
     machine.until(lambda s: s.current_vel == 0 and s.interp_state == cnc.INTERP_IDLE)
     expect(page.locator("#state")).to_have_text("READY")
@@ -560,6 +555,11 @@ def test_a_200000_line_program_loads_draws_runs_and_stops(
     machine.until(lambda s: s.current_vel > 0 and s.motion_line > 10)
     expect(page.locator("#state")).to_have_text("RUNNING")
     expect(page.locator(".listing-row.current")).to_have_count(1)  # followed
+    page.keyboard.press("p")  # pause: one word, never "PAUSED (paused)"
+    expect(page.locator("#state")).to_have_text("PAUSED")
+    expect(page.locator("#state-detail")).to_contain_text("Resume to continue")
+    page.keyboard.press("s")
+    expect(page.locator("#state")).to_have_text("RUNNING")
     page.screenshot(path=str(shots / "big-running.png"))
     box = page.locator("#abort").bounding_box()
     page.mouse.move(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
