@@ -163,8 +163,19 @@ def one_notice_per_error_and_it_expires(page) -> None:  # type: ignore[no-untype
     expect(notice).to_contain_text("Linear move would exceed X's positive limit")
     text = notice.inner_text()
     assert "line 0" not in text and "motion refused" not in text
+    assert not overlap(notice.bounding_box(), page.locator("#listing").bounding_box())
     expect(page.locator(".notice")).to_have_count(0)  # expired
     expect(page.locator("#notice-count")).to_have_text("1")  # kept in the log
+
+
+def overlap(a: dict, b: dict) -> bool:
+    """Whether two bounding boxes share any area."""
+    return (
+        a["x"] < b["x"] + b["width"]
+        and b["x"] < a["x"] + a["width"]
+        and a["y"] < b["y"] + b["height"]
+        and b["y"] < a["y"] + a["height"]
+    )
 
 
 def arrow_keys_jog_after_choosing_a_step_with_the_mouse(page) -> None:  # type: ignore[no-untyped-def]
@@ -426,6 +437,10 @@ def every_view_at_every_size(page, shots: Path) -> None:  # type: ignore[no-unty
             )
             assert clipped == 0, (name, view)
         page.click('#views [data-view="run"]')
+        if width >= 1024:  # listing and preview side by side, both whole in the window
+            for part in ("#listing", "#preview"):
+                box = page.locator(part).bounding_box()
+                assert box["height"] > 100 and box["y"] + box["height"] <= height, (name, part)
         page.evaluate("window.scrollTo(0, document.body.scrollHeight)")  # the tablet scrolls
         for button in ("#estop", "#abort"):  # ... under a header that stays
             assert page.locator(button).bounding_box()["y"] >= 0
