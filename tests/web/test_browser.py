@@ -163,8 +163,19 @@ def one_notice_per_error_and_it_expires(page) -> None:  # type: ignore[no-untype
     expect(notice).to_contain_text("Linear move would exceed X's positive limit")
     text = notice.inner_text()
     assert "line 0" not in text and "motion refused" not in text
+    assert not overlap(notice.bounding_box(), page.locator("#listing").bounding_box())
     expect(page.locator(".notice")).to_have_count(0)  # expired
     expect(page.locator("#notice-count")).to_have_text("1")  # kept in the log
+
+
+def overlap(a: dict, b: dict) -> bool:
+    """Whether two bounding boxes share any area."""
+    return (
+        a["x"] < b["x"] + b["width"]
+        and b["x"] < a["x"] + a["width"]
+        and a["y"] < b["y"] + b["height"]
+        and b["y"] < a["y"] + a["height"]
+    )
 
 
 def arrow_keys_jog_after_choosing_a_step_with_the_mouse(page) -> None:  # type: ignore[no-untyped-def]
@@ -263,6 +274,8 @@ def the_machines_spindle_and_coolant_beside_the_modal_state(  # type: ignore[no-
     page.select_option("#program-list", "cut.ngc")
     page.click("#program-open")
     expect(page.locator("#analysis")).to_contain_text("estimated run time")
+    codes = page.locator(".listing-row .code")  # never a line of the program before
+    expect(codes).to_have_text(["G21 G90", "M3 S1000", "M8", "G1 X60 F300", "M5 M9", "G0 X0", "M2"])
     page.click("#run")
     expect(page.locator("#state")).to_have_text("RUNNING")  # never READING or WAITING
     expect(page.locator("#now-spindle")).to_have_text("S 1000 rpm FWD")
@@ -404,7 +417,9 @@ def every_view_at_every_size(page, shots: Path) -> None:  # type: ignore[no-unty
     wider than the window, the DRO's buttons whole."""
     page.select_option("#program-list", "part.ngc")
     page.click("#program-open")
-    expect(page.locator("#listing")).to_have_attribute("data-lines", "4")
+    expect(page.locator(".listing-row .code").nth(2)).to_have_text("G3 X3 Y2 I1 F600")
+    expect(page.locator("#preview")).to_have_attribute("data-drawn", re.compile("[1-9]"))
+    expect(page.locator("#analysis")).to_contain_text("estimated run time")
     for name, (width, height) in SIZES.items():
         page.set_viewport_size({"width": width, "height": height})
         for view in VIEWS:
@@ -416,7 +431,16 @@ def every_view_at_every_size(page, shots: Path) -> None:  # type: ignore[no-unty
                 assert box is not None and box["x"] >= 0 and box["x"] + box["width"] <= width
                 assert box["y"] >= 0 and box["y"] + box["height"] <= height, (name, view, button)
             assert page.evaluate("document.documentElement.scrollWidth") <= width, (name, view)
+            clipped = page.evaluate(  # tables whose right part would need scrolling
+                "[...document.querySelectorAll('.view:not([hidden]) .table-box')]"
+                ".filter((box) => box.scrollWidth > box.clientWidth + 1).length"
+            )
+            assert clipped == 0, (name, view)
         page.click('#views [data-view="run"]')
+        if width >= 1024:  # listing and preview side by side, both whole in the window
+            for part in ("#listing", "#preview"):
+                box = page.locator(part).bounding_box()
+                assert box["height"] > 100 and box["y"] + box["height"] <= height, (name, part)
         page.evaluate("window.scrollTo(0, document.body.scrollHeight)")  # the tablet scrolls
         for button in ("#estop", "#abort"):  # ... under a header that stays
             assert page.locator(button).bounding_box()["y"] >= 0
@@ -431,7 +455,10 @@ def the_machine_goes(page, machine: Machine, shots: Path) -> None:  # type: igno
     """This server owns message pins of the machine's HAL, so the machine's shut-down
     stops it too (as LinuxCNC's unload all stops user components): the page shows that
     nothing answers and takes no command. (The 200,000-line test sees a controller go
-    while its server stays, and come back.)"""
+    while its server stays, and come back.) First F1, E-stop from the keyboard."""
+    page.keyboard.press("F1")
+    machine.until(lambda s: s.task_state == cnc.STATE_ESTOP)
+    expect(page.locator("#state")).to_have_text("E-STOP")
     machine.stop()
     expect(page.locator("#state")).to_have_text("OFFLINE")
     expect(page.locator("#offline")).to_contain_text("The web server does not answer")
@@ -441,6 +468,62 @@ def the_machine_goes(page, machine: Machine, shots: Path) -> None:  # type: igno
 
 
 # ================================================================== a big program
+LEVEL_OF_DETAIL = """async () => {
+  // A 10 mm square in 0.1 mm feeds, a rapid in ten steps, a 5 mm circle in 1 degree
+  // feeds; each point's line is its index. Given in two pieces, as a page receives it.
+  const { Decimator } = await import("/static/js/lod.js");
+  const points = [];
+  const corners = [[0, 0], [10, 0], [10, 10], [0, 10], [0, 0]];
+  for (let side = 0; side < 4; side++) {
+    const [a, b] = [corners[side], corners[side + 1]];
+    for (let i = side ? 1 : 0; i <= 100; i++) {
+      points.push([a[0] + (b[0] - a[0]) * i / 100, a[1] + (b[1] - a[1]) * i / 100, 0, 1]);
+    }
+  }
+  for (let i = 1; i <= 10; i++) points.push([2.5 * i, 0.5 * i, 0.5 * i, 0]);
+  for (let i = 1; i <= 360; i++) {
+    const angle = Math.PI / 2 - i * Math.PI / 180;
+    points.push([25 + 5 * Math.cos(angle), 5 * Math.sin(angle), 5, 1]);
+  }
+  const records = new ArrayBuffer(16 * points.length);
+  const floats = new Float32Array(records), words = new Uint32Array(records);
+  points.forEach(([x, y, z, kind], i) => {
+    floats.set([x, y, z], 4 * i);
+    words[4 * i + 3] = (i << 1) | kind;
+  });
+  const decimator = new Decimator(0.01);
+  const half = 16 * 250;
+  decimator.add(records.slice(0, half));
+  decimator.add(records.slice(half));
+  const keptWords = new Uint32Array(decimator.kept().slice().buffer);
+  const kept = [];
+  for (let i = 3; i < keptWords.length; i += 4) kept.push(keptWords[i] >> 1);
+  // how far each point is from the line drawn instead
+  let farthest = 0;
+  for (let k = 0; k + 1 < kept.length; k++) {
+    const a = points[kept[k]], b = points[kept[k + 1]];
+    for (let i = kept[k] + 1; i < kept[k + 1]; i++) {
+      const p = points[i];
+      const d = [0, 1, 2].map((n) => b[n] - a[n]), q = [0, 1, 2].map((n) => p[n] - a[n]);
+      const length = d[0] ** 2 + d[1] ** 2 + d[2] ** 2;
+      const t = Math.max(0, Math.min(1, (q[0] * d[0] + q[1] * d[1] + q[2] * d[2]) / length));
+      farthest = Math.max(farthest, Math.hypot(q[0] - t * d[0], q[1] - t * d[1], q[2] - t * d[2]));
+    }
+  }
+  return { total: points.length, kept, farthest };
+}"""
+
+
+def the_level_of_detail_keeps_the_shape(page) -> None:  # type: ignore[no-untyped-def]
+    """What the preview draws while the view turns (js/lod.js): corners and the ends of
+    rapids kept, every point dropped within the tolerance, far fewer points."""
+    found = page.evaluate(LEVEL_OF_DETAIL)
+    kept = found["kept"]
+    assert {0, 100, 200, 300, 400, 410, found["total"] - 1} <= set(kept)  # corners, rapid
+    assert found["farthest"] <= 0.01 + 1e-5
+    assert len(kept) < found["total"] / 8
+
+
 def big_program(path: Path, lines: int) -> None:
     """A Lissajous of ``lines`` short feeds at 3000 mm/min within the test mill's limits."""
     out = ["G21 G90 G64 F3000", "G0 Z1", "G0 X0 Y9", "G1 Z-0.5 F600", "F3000"]
@@ -470,6 +553,16 @@ def test_a_200000_line_program_loads_draws_runs_and_stops(
     expect(listing).to_have_attribute("data-lines", "200007")
     expect(page.locator("#preview")).to_have_attribute("data-drawn", "200005")
     assert page.locator(".listing-row").count() < 100  # only the lines in view exist
+    the_level_of_detail_keeps_the_shape(page)
+    preview = page.locator("#preview")  # turned: drawn simplified, then whole again
+    frames = int(preview.get_attribute("data-frames"))
+    box = preview.bounding_box()
+    page.mouse.move(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
+    page.mouse.down()
+    page.mouse.move(box["x"] + box["width"] / 2 + 60, box["y"] + box["height"] / 2, steps=6)
+    page.mouse.up()
+    expect(preview).to_have_attribute("data-drawn", "200005")
+    assert int(preview.get_attribute("data-frames")) > frames
     listing.evaluate("e => { e.scrollTop = e.scrollHeight; }")
     expect(page.locator(".listing-row .code").last).to_have_text("M2")
     page.click('[data-camera="top"]')
@@ -477,6 +570,11 @@ def test_a_200000_line_program_loads_draws_runs_and_stops(
     machine.until(lambda s: s.current_vel > 0 and s.motion_line > 10)
     expect(page.locator("#state")).to_have_text("RUNNING")
     expect(page.locator(".listing-row.current")).to_have_count(1)  # followed
+    page.keyboard.press("p")  # pause: one word, never "PAUSED (paused)"
+    expect(page.locator("#state")).to_have_text("PAUSED")
+    expect(page.locator("#state-detail")).to_contain_text("Resume to continue")
+    page.keyboard.press("s")
+    expect(page.locator("#state")).to_have_text("RUNNING")
     page.screenshot(path=str(shots / "big-running.png"))
     box = page.locator("#abort").bounding_box()
     page.mouse.move(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)

@@ -61,17 +61,22 @@ class CollectingCanon(PrintingCanon):
         self.sink = sink
         self.point_count = 0
         self._records = bytearray()
+        self._factor = self.factor()
         self._add(RAPID, 0, 0.0, 0.0, 0.0)  # where the first move starts
 
-    def _factor(self) -> float:
+    def factor(self) -> float:
         """Program units -> machine units."""
         return (MM_PER_INCH if self.length_unit_type == UNITS_INCHES else 1.0) * self.units_per_mm
+
+    def USE_LENGTH_UNITS(self, units: int) -> None:
+        super().USE_LENGTH_UNITS(units)
+        self._factor = self.factor()  # (once here, not for every point)
 
     def _add(self, kind: int, line: int, x: float, y: float, z: float) -> None:
         if self.point_count >= MAX_POINTS:
             raise PreviewTooLongError
-        f = self._factor()
-        self._records += RECORD.pack(x * f, y * f, z * f, max(line, 0) << 1 | kind)
+        f = self._factor
+        self._records += RECORD.pack(x * f, y * f, z * f, (line << 1 | kind) if line > 0 else kind)
         self.point_count += 1
         if len(self._records) >= CHUNK_POINTS * RECORD.size:
             self.flush_records()
@@ -118,7 +123,7 @@ class CollectingCanon(PrintingCanon):
             if end >= begin:
                 end -= 2 * math.pi
             end -= 2 * math.pi * turns
-        steps = max(1, math.ceil(abs(end - begin) / _arc_step(radius * self._factor())))
+        steps = max(1, math.ceil(abs(end - begin) / _arc_step(radius * self._factor)))
         for step in range(1, steps + 1):
             t = step / steps
             angle = begin + (end - begin) * t

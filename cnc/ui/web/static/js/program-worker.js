@@ -12,7 +12,7 @@
 //   {type: "text", number, bytes, starts}          the text and where each line starts
 //                                                  (transferred: the page decodes only
 //                                                  the lines it shows)
-//   {type: "preview", number, points, drawn, renderer, bounds}
+//   {type: "preview", number, points, drawn, renderer, frames, bounds}
 //   {type: "failed", number, what, message}
 
 import { Renderer } from "./renderer.js";
@@ -85,7 +85,7 @@ async function loadPreview(forNumber) {
       if (forNumber !== number || data.byteLength === 0) break;
       fetched += data.byteLength / RECORD;
       grow(new DataView(data));
-      if (renderer) renderer.append(data);
+      if (renderer) renderer.append(data, bounds);
     }
   } catch (error) {
     self.postMessage({ type: "failed", number: forNumber, what: "preview", message: String(error) });

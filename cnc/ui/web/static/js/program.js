@@ -35,6 +35,7 @@ on("program", (message) => {
   if (message.number !== number) {
     number = message.number;
     text = null;
+    $("listing").dataset.lines = 0;  // until this program's text is here
     selected = 0;
     preview.reset();
     drawListing();
@@ -66,6 +67,7 @@ worker.onmessage = (event) => {
   if (message.type === "text") {
     const starts = new Uint32Array(message.starts);
     text = { bytes: new Uint8Array(message.bytes), starts, count: starts.length - 1 };
+    rows.replaceChildren();  // rows of the program before, whatever their lines
     $("listing").dataset.lines = text.count;
     followLine(true);
   } else if (message.type === "preview") {

@@ -4,26 +4,35 @@
 // that draws or uploads until it has caught up; here that blocks only this worker).
 //
 // WebGL 2: the toolpath records (x, y, z float32 and line << 1 | kind,
-// cnc/ui/web/preview.py) are uploaded as they arrive, as they are, and the card colours
-// each segment by its kind and line (rapid, to cut, cut, selected) from a few numbers.
-// The toolpath is drawn into an image of its own, again only when something in it
-// changed; every frame lays that image under the tool's mark. While the view turns, or
-// the toolpath still loads, a long one is drawn decimated (every k-th point); while a
-// long program runs, the cut part is recoloured at most every RECOLOUR_MS. Without
-// WebGL 2, a 2D canvas draws a decimated toolpath, at most twice a second.
+// cnc/ui/web/preview.py) are uploaded once, as they arrive, as they are, and the card
+// colours each segment by its kind and line (rapid, to cut, cut, selected) from a few
+// numbers. The toolpath is drawn into an image of its own, which every frame lays under
+// the tool's mark; nothing per frame costs the page's or this thread time in proportion
+// to the toolpath's length. What arrives while the program loads is drawn on top of what
+// is there. A long toolpath (over FULL_POINTS_PER_FRAME) costs more than one frame to
+// draw whole: a change of the view (turn, pan, zoom, size, colours) draws its level of
+// detail (lod.js: the points that keep its shape, made once as it arrives, in a buffer
+// of its own) at once, and, once the view rests for TURNING_MS, the whole toolpath is
+// drawn into a second image, FULL_POINTS_PER_FRAME points a frame, which then takes the
+// first one's place. While a long program runs, the cut part is recoloured that way too,
+// at most every RECOLOUR_MS. Without WebGL 2, a 2D canvas draws a decimated toolpath, at
+// most twice a second.
 
 import { rotation } from "./camera.js";
+import { Decimator } from "./lod.js";
 
 const RECORD = 16;
-const DECIMATED_POINTS = 250_000;  // drawn while turning or loading, when longer
-const UPLOAD_BYTES_PER_FRAME = 4 << 20;
+const FULL_POINTS_PER_FRAME = 100_000;  // what a software renderer draws in well under a frame
+const LOD_TOLERANCE = 1 / 1500;  // of the toolpath's diagonal: about a pixel when fitted
+const LOD_MAX_POINTS = 120_000;  // over this, a coarser level of detail
+const UPLOAD_BYTES_PER_FRAME = 8 << 20;
 const MAX_2D_SEGMENTS = 20_000;
 const MIN_2D_REDRAW_MS = 500;
 const BIG_PATH_POINTS = 50_000;  // longer toolpaths are recoloured at most every ...
 const RECOLOUR_MS = 1000;
-const TURNING_MS = 250;  // after the last turn of the view, the full toolpath again
+const TURNING_MS = 250;  // after the last turn of the view, the whole toolpath again
+const VIEW_KEYS = ["width", "height", "ratio", "view", "colors", "limits"];
 const nextFrame = self.requestAnimationFrame ? (f) => self.requestAnimationFrame(f) : (f) => setTimeout(f, 16);
-
 const PATH_VERTEX = `#version 300 es
 layout(location = 0) in vec3 position;
 layout(location = 1) in uint tag;
@@ -70,7 +79,7 @@ out vec4 fragment;
 void main() { fragment = texture(image, place); }`;
 
 export class Renderer {
-  // ``report(message)`` tells the page what is drawn: {points, drawn, renderer}.
+  // ``report(message)`` tells the page what is drawn: {points, drawn, renderer, frames}.
   constructor(canvas, report) {
     this.canvas = canvas;
     this.report = report;
@@ -84,6 +93,7 @@ export class Renderer {
     this.isVisible = true;
     this.turnedAt = -Infinity;
     this.isDrawPending = false;
+    this.frames = 0;  // frames shown (ui_bench counts them while the view turns)
     // no antialiasing: a software card pays dearly for it
     this.gl = canvas.getContext("webgl2", { antialias: false });
     this.kind = this.gl ? "webgl" : "2d";
@@ -96,27 +106,44 @@ export class Renderer {
     this.count = 0;  // records received
     this.uploaded = 0;  // ... and on the card
     this.pending = [];  // pieces waiting to be uploaded
-    this.records = [];  // the 2D canvas keeps every piece
-    this.decimated = null;
-    this.redraw();
-  }
-
-  append(data) {
-    this.count += data.byteLength / RECORD;
-    this.pending.push(data);
-    this.redraw();
-  }
-
-  set(changes) {  // any of width, height, ratio, view, colors, current, selected, tool,
-    Object.assign(this, changes);  // limits, isVisible
-    if ("turned" in changes) this.turnedAt = performance.now();
-    const isOnlyTool = Object.keys(changes).every((key) => key === "tool");
-    if (!isOnlyTool) this.isPathStale = true;
+    this.pieces = [];  // every piece (the level of detail is made again from them)
+    this.bounds = null;
+    this.lod = null;  // a Decimator
+    this.lodUploaded = -1;  // records of the level of detail on the card
+    this.drawn = 0;
+    this.frontPoints = 0;  // toolpath points in the image shown; null: its level of detail
+    this.refining = null;  // the whole toolpath being drawn into the second image
+    this.isLodGrown = false;
+    this.isViewStale = true;  // the image shown is not of the view
+    this.isLinesStale = false;  // ... nor of the current and selected lines
     this.draw();
   }
 
-  redraw() {
-    this.isPathStale = true;
+  // A piece of toolpath (records); ``bounds``: of the whole toolpath so far.
+  append(data, bounds) {
+    this.count += data.byteLength / RECORD;
+    this.pending.push(data);
+    this.pieces.push(data);
+    this.bounds = bounds;
+    if (this.gl) this.growLod(data);
+    this.draw();
+  }
+
+  set(changes) {  // any of width, height, ratio, view, colors, current, selected, tool,
+    // limits, isVisible, turned
+    if ("limits" in changes && JSON.stringify(changes.limits) === JSON.stringify(this.limits)) {
+      delete changes.limits;  // sent with every move of the tool
+    }
+    if (VIEW_KEYS.some((key) => key in changes) || (changes.isVisible && !this.isVisible)) {
+      this.isViewStale = true;
+    }
+    if (("current" in changes && changes.current !== this.current)
+        || ("selected" in changes && changes.selected !== this.selected)) {
+      this.isLinesStale = true;
+    }
+    if (changes.turned) this.turnedAt = performance.now();
+    delete changes.turned;
+    Object.assign(this, changes);
     this.draw();
   }
 
@@ -134,10 +161,23 @@ export class Renderer {
     if (this.canvas.width !== width || this.canvas.height !== height) {
       this.canvas.width = width;
       this.canvas.height = height;
-      this.isPathStale = true;
+      this.isViewStale = true;
     }
     if (this.gl) this.paintGl(); else this.paint2d();
-    this.report({ points: this.count, drawn: this.drawn || 0, renderer: this.kind });
+    this.frames++;
+    this.report({ points: this.count, drawn: this.drawn, renderer: this.kind, frames: this.frames });
+  }
+
+  // ---------------------------------------------------------------- level of detail
+  growLod(data) {
+    const tolerance = LOD_TOLERANCE * diagonal(this.bounds);
+    if (!this.lod) this.lod = new Decimator(tolerance);
+    this.lod.add(data);
+    while (this.lod.count > LOD_MAX_POINTS) {  // coarser, from the start
+      this.lod = new Decimator(this.lod.tolerance * 2);
+      for (const piece of this.pieces) this.lod.add(piece);
+    }
+    this.lodUploaded = -1;
   }
 
   // ---------------------------------------------------------------- WebGL
@@ -146,11 +186,18 @@ export class Renderer {
     this.pathProgram = program(gl, PATH_VERTEX, PATH_FRAGMENT);
     this.plainProgram = program(gl, PLAIN_VERTEX, PLAIN_FRAGMENT);
     this.imageProgram = program(gl, IMAGE_VERTEX, IMAGE_FRAGMENT);
+    this.uniforms = {};
+    for (const name of ["transform", "current", "selected", "rapidColor", "feedColor", "doneColor", "selectedColor"]) {
+      this.uniforms[name] = gl.getUniformLocation(this.pathProgram, name);
+    }
     this.pathVao = gl.createVertexArray();
     this.capacity = 0;
     this.buffer = null;
-    this.indexBuffer = gl.createBuffer();
-    this.image = { texture: gl.createTexture(), framebuffer: gl.createFramebuffer(), width: 0, height: 0 };
+    this.lodVao = gl.createVertexArray();
+    this.lodBuffer = gl.createBuffer();
+    bindRecords(gl, this.lodVao, this.lodBuffer);
+    this.front = newImage(gl);  // shown
+    this.back = newImage(gl);  // the whole toolpath drawn into it, a part a frame
     this.plainVao = gl.createVertexArray();
     this.plainBuffer = gl.createBuffer();
     gl.bindVertexArray(this.plainVao);
@@ -175,14 +222,7 @@ export class Renderer {
     if (this.buffer) gl.deleteBuffer(this.buffer);
     this.buffer = buffer;
     this.capacity = capacity;
-    gl.bindVertexArray(this.pathVao);
-    gl.bindBuffer(gl.ARRAY_BUFFER, buffer);
-    gl.enableVertexAttribArray(0);
-    gl.vertexAttribPointer(0, 3, gl.FLOAT, false, RECORD, 0);
-    gl.enableVertexAttribArray(1);
-    gl.vertexAttribIPointer(1, 1, gl.UNSIGNED_INT, RECORD, 12);
-    gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, this.indexBuffer);
-    gl.bindVertexArray(null);
+    bindRecords(gl, this.pathVao, buffer);
   }
 
   // Upload pending pieces (at most UPLOAD_BYTES_PER_FRAME a frame); true if more wait.
@@ -198,23 +238,13 @@ export class Renderer {
       this.uploaded += records;
       budget -= data.byteLength;
     }
+    if (this.lod && this.lodUploaded !== this.lod.count) {
+      gl.bindBuffer(gl.ARRAY_BUFFER, this.lodBuffer);
+      gl.bufferData(gl.ARRAY_BUFFER, this.lod.kept(), gl.STATIC_DRAW);
+      this.lodUploaded = this.lod.count;
+      this.isLodGrown = true;
+    }
     return this.pending.length > 0;
-  }
-
-  // Every k-th point of the toolpath (and the last), for drawing while the view turns.
-  decimate() {
-    const gl = this.gl;
-    if (this.decimated && this.decimated.count === this.uploaded) return this.decimated;
-    const step = Math.ceil(this.uploaded / DECIMATED_POINTS);
-    const indexes = new Uint32Array(Math.ceil(this.uploaded / step) + 1);
-    let length = 0;
-    for (let i = 0; i < this.uploaded; i += step) indexes[length++] = i;
-    if (indexes[length - 1] !== this.uploaded - 1) indexes[length++] = this.uploaded - 1;
-    gl.bindVertexArray(this.pathVao);
-    gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, indexes.subarray(0, length), gl.STATIC_DRAW);
-    gl.bindVertexArray(null);
-    this.decimated = { count: this.uploaded, length };
-    return this.decimated;
   }
 
   transform() {
@@ -229,9 +259,96 @@ export class Renderer {
     ]);
   }
 
-  // The image the toolpath is drawn into, as big as the canvas.
-  imageTarget() {
-    const gl = this.gl, image = this.image;
+  // What the toolpath is drawn with: the view and the lines of this moment.
+  look() {
+    return { transform: this.transform(), current: this.current, selected: this.selected };
+  }
+
+  // Each frame: the toolpath image brought up to date (within a frame's work), then shown
+  // under the tool's mark.
+  paintGl() {
+    const gl = this.gl;
+    const now = performance.now();
+    const isTurning = now - this.turnedAt < TURNING_MS;
+    const isUploading = this.upload();
+    const isLong = this.uploaded > FULL_POINTS_PER_FRAME && this.lodUploaded > 1;
+    const isRecolourDue = this.count < BIG_PATH_POINTS || now - (this.recolouredAt || 0) >= RECOLOUR_MS;
+    if (this.isViewStale || (this.isLinesStale && isRecolourDue && !isLong)) {
+      const look = this.look();
+      if (isLong) {
+        this.paintLod(look);
+        this.refining = { look, points: 0 };  // the whole of it, when the view rests
+      } else {
+        this.clearImage(this.front, look);
+        this.paintMore(this.front, 0, look);
+        this.frontPoints = Math.min(this.uploaded, FULL_POINTS_PER_FRAME);
+        this.refining = null;
+      }
+      this.isViewStale = this.isLinesStale = false;
+      this.recolouredAt = now;
+    } else if (this.isLinesStale && isRecolourDue && !this.refining) {
+      this.refining = { look: this.look(), points: 0 };  // shown when whole
+      this.isLinesStale = false;
+      this.recolouredAt = now;
+    } else if (this.frontPoints === null && this.isLodGrown) {
+      this.paintLod(this.look());  // the program still loads
+    }
+    if (this.refining && !isTurning) {
+      this.refine();
+    } else if (this.frontPoints !== null && this.frontPoints < this.uploaded) {
+      this.paintMore(this.front, this.frontPoints, this.look());  // what arrived
+      this.frontPoints = Math.min(this.uploaded, this.frontPoints + FULL_POINTS_PER_FRAME);
+    }
+    this.drawn = this.frontPoints === null ? 0 : this.frontPoints;
+    gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+    gl.viewport(0, 0, this.canvas.width, this.canvas.height);
+    gl.useProgram(this.imageProgram);
+    gl.bindTexture(gl.TEXTURE_2D, this.front.texture);
+    gl.drawArrays(gl.TRIANGLES, 0, 3);
+    this.paintTool(this.transform());
+    const isBehind = this.frontPoints !== null && this.frontPoints < this.uploaded;
+    if (isUploading || isBehind || this.refining) {
+      setTimeout(() => this.draw(), isTurning ? TURNING_MS / 4 : 0);
+    } else if (this.isLinesStale) {
+      setTimeout(() => this.draw(), RECOLOUR_MS / 4);
+    }
+  }
+
+  // The level of detail, alone in the image shown.
+  paintLod(look) {
+    this.clearImage(this.front, look);
+    this.paintPath(this.lodVao, 0, this.lodUploaded, look);
+    this.frontPoints = null;
+    this.isLodGrown = false;
+  }
+
+  // One frame's part of the whole toolpath into the second image; when it is all there,
+  // the second image is shown.
+  refine() {
+    const refining = this.refining;
+    if (refining.points === 0) this.clearImage(this.back, refining.look);
+    this.paintMore(this.back, refining.points, refining.look);
+    refining.points = Math.min(this.uploaded, refining.points + FULL_POINTS_PER_FRAME);
+    if (refining.points < this.uploaded) return;
+    [this.front, this.back] = [this.back, this.front];
+    this.frontPoints = refining.points;
+    this.refining = null;
+  }
+
+  // The toolpath from point ``from`` on (FULL_POINTS_PER_FRAME of it at most) on top of
+  // what ``image`` holds.
+  paintMore(image, from, look) {
+    const gl = this.gl;
+    const first = Math.max(0, from - 1);  // the segment that joins the part before
+    const count = Math.min(this.uploaded, from + FULL_POINTS_PER_FRAME) - first;
+    gl.bindFramebuffer(gl.FRAMEBUFFER, image.framebuffer);
+    gl.viewport(0, 0, image.width, image.height);
+    this.paintPath(this.pathVao, first, count, look);
+  }
+
+  // ``image`` as big as the canvas, cleared, with the machine's limits.
+  clearImage(image, look) {
+    const gl = this.gl;
     if (image.width !== this.canvas.width || image.height !== this.canvas.height) {
       image.width = this.canvas.width;
       image.height = this.canvas.height;
@@ -241,71 +358,28 @@ export class Renderer {
       gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
       gl.bindFramebuffer(gl.FRAMEBUFFER, image.framebuffer);
       gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, image.texture, 0);
-      gl.bindFramebuffer(gl.FRAMEBUFFER, null);
-      this.isPathStale = true;
     }
-    return image;
+    gl.bindFramebuffer(gl.FRAMEBUFFER, image.framebuffer);
+    gl.viewport(0, 0, image.width, image.height);
+    gl.clearColor(...this.colors.background);
+    gl.clear(gl.COLOR_BUFFER_BIT);
+    if (this.limits) this.plainLines(limitEdges(this.limits), look.transform, this.colors.limits);
   }
 
-  paintGl() {
-    const gl = this.gl, colors = this.colors;
-    const transform = this.transform();
-    const image = this.imageTarget();
-    const now = performance.now();
-    const isTurning = now - this.turnedAt < TURNING_MS;
-    const isRecolourDue = this.count < BIG_PATH_POINTS || isTurning || now - (this.pathDrawnAt || 0) >= RECOLOUR_MS;
-    let isMoreToDraw = false;
-    if (this.pending.length || (this.isPathStale && isRecolourDue)) {
-      const isUploading = this.upload();
-      const isDecimated = (isTurning || isUploading) && this.uploaded > DECIMATED_POINTS;
-      gl.bindFramebuffer(gl.FRAMEBUFFER, image.framebuffer);
-      gl.viewport(0, 0, image.width, image.height);
-      gl.clearColor(...colors.background);
-      gl.clear(gl.COLOR_BUFFER_BIT);
-      this.paintLimits(transform);
-      this.paintPath(transform, isDecimated);
-      gl.bindFramebuffer(gl.FRAMEBUFFER, null);
-      this.isPathStale = isDecimated;  // the whole of it once the view rests
-      this.pathDrawnAt = now;
-      if (!isDecimated) this.drawn = this.uploaded;
-      isMoreToDraw = isUploading || isDecimated;
-    } else if (this.isPathStale) {
-      isMoreToDraw = true;  // a recolouring, in a moment
-    }
-    gl.viewport(0, 0, this.canvas.width, this.canvas.height);
-    gl.useProgram(this.imageProgram);
-    gl.bindTexture(gl.TEXTURE_2D, image.texture);
-    gl.drawArrays(gl.TRIANGLES, 0, 3);
-    this.paintTool(transform);
-    if (isMoreToDraw) setTimeout(() => this.draw(), isTurning ? 16 : 100);
-  }
-
-  paintPath(transform, isDecimated) {
-    const gl = this.gl, colors = this.colors;
-    if (this.uploaded < 2) return;
+  paintPath(vao, first, count, look) {
+    const gl = this.gl, colors = this.colors, uniforms = this.uniforms;
+    if (count < 2) return;
     gl.useProgram(this.pathProgram);
-    const uniform = (name) => gl.getUniformLocation(this.pathProgram, name);
-    gl.uniformMatrix4fv(uniform("transform"), false, transform);
-    gl.uniform1f(uniform("current"), this.current);
-    gl.uniform1f(uniform("selected"), this.selected);
-    gl.uniform4fv(uniform("rapidColor"), colors.rapid);
-    gl.uniform4fv(uniform("feedColor"), colors.feed);
-    gl.uniform4fv(uniform("doneColor"), colors.done);
-    gl.uniform4fv(uniform("selectedColor"), colors.selected);
-    gl.bindVertexArray(this.pathVao);
-    if (isDecimated) {
-      const decimated = this.decimate();
-      gl.drawElements(gl.LINE_STRIP, decimated.length, gl.UNSIGNED_INT, 0);
-    } else {
-      gl.drawArrays(gl.LINE_STRIP, 0, this.uploaded);
-    }
+    gl.uniformMatrix4fv(uniforms.transform, false, look.transform);
+    gl.uniform1f(uniforms.current, look.current);
+    gl.uniform1f(uniforms.selected, look.selected);
+    gl.uniform4fv(uniforms.rapidColor, colors.rapid);
+    gl.uniform4fv(uniforms.feedColor, colors.feed);
+    gl.uniform4fv(uniforms.doneColor, colors.done);
+    gl.uniform4fv(uniforms.selectedColor, colors.selected);
+    gl.bindVertexArray(vao);
+    gl.drawArrays(gl.LINE_STRIP, first, count);
     gl.bindVertexArray(null);
-  }
-
-  paintLimits(transform) {
-    const box = this.limits;
-    if (!box) return;
-    this.plainLines(limitEdges(box), transform, this.colors.limits);
   }
 
   paintTool(transform) {
@@ -327,7 +401,8 @@ export class Renderer {
   // ---------------------------------------------------------------- 2D canvas
   paint2d() {
     this.drawn2d = performance.now();
-    this.records.push(...this.pending.splice(0).map((data) => new DataView(data)));
+    this.pending = [];
+    const records = this.pieces.map((data) => new DataView(data));
     const g = this.canvas.getContext("2d");
     const colors = this.colors, ratio = this.ratio;
     const css = (c) => `rgba(${c[0] * 255},${c[1] * 255},${c[2] * 255},${c[3]})`;
@@ -347,7 +422,7 @@ export class Renderer {
       g.lineWidth = 1;
       g.beginPath();
       let previous = null, index = 0;
-      for (const view of this.records) {
+      for (const view of records) {
         for (let offset = 0; offset < view.byteLength; offset += RECORD, index++) {
           if (index % step && offset + RECORD < view.byteLength) continue;
           const point = screen(view.getFloat32(offset, true), view.getFloat32(offset + 4, true),
@@ -363,6 +438,28 @@ export class Renderer {
     g.beginPath(); g.arc(tx, ty, 6, 0, 2 * Math.PI); g.stroke();
     this.drawn = this.count;
   }
+}
+
+// Records (RECORD) in ``buffer`` as the path program's inputs, in ``vao``.
+function bindRecords(gl, vao, buffer) {
+  gl.bindVertexArray(vao);
+  gl.bindBuffer(gl.ARRAY_BUFFER, buffer);
+  gl.enableVertexAttribArray(0);
+  gl.vertexAttribPointer(0, 3, gl.FLOAT, false, RECORD, 0);
+  gl.enableVertexAttribArray(1);
+  gl.vertexAttribIPointer(1, 1, gl.UNSIGNED_INT, RECORD, 12);
+  gl.bindVertexArray(null);
+}
+
+// An image (a texture and its framebuffer); sized when first drawn into.
+function newImage(gl) {
+  return { texture: gl.createTexture(), framebuffer: gl.createFramebuffer(), width: 0, height: 0 };
+}
+
+// The length of the diagonal of ``bounds`` ([xmin, ymin, zmin, xmax, ymax, zmax]).
+function diagonal(bounds) {
+  if (!bounds) return 1;
+  return Math.max(Math.hypot(bounds[3] - bounds[0], bounds[4] - bounds[1], bounds[5] - bounds[2]), 1e-3);
 }
 
 // The 12 edges of the machine's limits, as line pairs.

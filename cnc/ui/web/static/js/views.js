@@ -290,10 +290,12 @@ function goToLine(line) {
   editor.scrollTop = Math.max(0, (line - 5) * parseFloat(getComputedStyle(editor).lineHeight));
 }
 
+let checkNumber = 0;  // only the last check's answer is shown (answers may cross)
 async function check() {
+  const number = ++checkNumber;
   $("editor-state").textContent = "checking…";
   const result = await send("check_program", { text: editor.value });
-  if (result.status !== "DONE") return;
+  if (result.status !== "DONE" || number !== checkNumber) return;
   showGutter(result.errors);
   $("editor-state").textContent = result.errors.length ? `${result.errors.length} error(s)` : `no errors · ${result.points - 1} moves`;
 }
