@@ -477,7 +477,7 @@ class Launcher:
         if self.board is not None:
             self.board.begin_shutdown()  # processes leaving now are not lost
         if self.bridges is not None:
-            self.bridges.stop(_terminate)
+            self.bridges.stop()
         _terminate(self.display, "display")
         _terminate(self.task, "task", timeout=10)
         if self.is_hal_loaded and self.host is not None and self.host.poll() is None:

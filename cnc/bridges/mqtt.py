@@ -54,6 +54,7 @@ import paho.mqtt.client as mqtt
 
 import cnc
 from cnc.bridges.machine import OFFLINE, MachineView, identification, machine_name
+from cnc.ini import IniError
 from cnc.inischema import MachineConfig, load_config
 
 COMMAND_WAIT_S = 1.0  # how long a command's answer waits for task to finish it
@@ -313,7 +314,11 @@ def main(argv: list[str]) -> int:
     if len(argv) != 1 or argv[0].startswith("-"):
         print("usage: cnc bridge mqtt INI", file=sys.stderr)
         return 2
-    bridge = MqttBridge(argv[0], load_config(argv[0]))
+    try:
+        bridge = MqttBridge(argv[0], load_config(argv[0]))
+    except IniError as exc:  # (cnc run would not start either)
+        say(str(exc))
+        return 1
 
     def on_signal(_signum: int, _frame: object) -> None:
         bridge.is_stopping = True

@@ -19,6 +19,7 @@ from cnc.inischema import MachineConfig
 
 RESTART_DELAYS_S = (1.0, 2.0, 5.0, 10.0, 30.0, 60.0)
 STABLE_S = 60.0  # a bridge that ran this long starts again from the first delay
+STOP_TIMEOUT_S = 3.0
 
 
 @dataclass
@@ -96,7 +97,18 @@ class BridgeSupervisor:
             b.name: b.proc.pid for b in self.bridges if b.proc is not None and b.proc.poll() is None
         }
 
-    def stop(self, terminate: Callable[..., None]) -> None:
+    def stop(self) -> None:
+        """SIGTERM to every bridge at once; any still running after STOP_TIMEOUT_S is killed
+        (a bridge holds nothing the machine needs: its shut-down never waits long)."""
+        running = [b.proc for b in self.bridges if b.proc is not None and b.proc.poll() is None]
         for bridge in self.bridges:
             bridge.restart_at = None
-            terminate(bridge.proc, f"the {bridge.name} bridge")
+        for proc in running:
+            proc.terminate()
+        deadline = time.monotonic() + STOP_TIMEOUT_S
+        for proc in running:
+            try:
+                proc.wait(max(0.0, deadline - time.monotonic()))
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait()
