@@ -32,7 +32,7 @@ from tests.bridges.conftest import (
 )
 from tests.conftest import Processes
 
-pytestmark = [needs_mosquitto, pytest.mark.slow]
+pytestmark = [needs_mosquitto, pytest.mark.slow, pytest.mark.timeout(600)]
 ROOT = "cnc/mill-1"
 PUBLISHER_PREFIX = "devices/linuxcnc/mill-1"
 # the keys of LinuxCNC's tests/mqtt/simulator.hal, with this machine's signal names

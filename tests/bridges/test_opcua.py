@@ -24,7 +24,7 @@ from tests.bridges.conftest import WAIT_S, Machine, free_port, running_machine, 
 from tests.bridges.test_mqtt import home_and_move, machine_on
 from tests.conftest import Processes
 
-pytestmark = pytest.mark.slow
+pytestmark = [pytest.mark.slow, pytest.mark.timeout(600)]  # (a loaded computer)
 NAME = "mill-1"
 USER, PASSWORD = "mes", "mes-secret"
 START_S = 3 * WAIT_S  # for the server to listen
