@@ -56,9 +56,10 @@ import cnc  # noqa: E402
 from cnc.runtime import read_runtime_info  # noqa: E402
 from nml.ipcnames import INSTANCE_ENV, remove_instance_objects  # noqa: E402
 
-WAIT_S = 120.0
+WAIT_S = 600.0  # start-up on a loaded computer (asyncua builds its address space in seconds)
 USER, PASSWORD = "fleet", "fleet-secret"
 CLOCK_TICKS = os.sysconf("SC_CLK_TCK")
+SEEN_S = 5.0  # a feed override change not in the status by then is left out
 
 
 def free_port() -> int:
@@ -166,14 +167,17 @@ class Machine:
             c.mode(cnc.MODE_MDI)
             c.wait_complete()
 
-    def change_feed_override(self, scale: float) -> float:
-        """Set the feed override; the time (monotonic) the status first shows it."""
+    def change_feed_override(self, scale: float) -> float | None:
+        """Set the feed override; the time (monotonic) the status first shows it, None if
+        it does not within SEEN_S (counted in the result as ``unseen_changes``)."""
         with self.selected():
             self.command.feedrate(scale)
-            while True:
+            deadline = time.monotonic() + SEEN_S
+            while time.monotonic() < deadline:
                 self.stat.poll()
                 if abs(self.stat.feedrate - scale) < 1e-9:
                     return time.monotonic()
+        return None
 
     def processes(self) -> dict[str, int]:
         """pid of the launcher, each descendant, by role: launcher, mqtt, opcua, other."""
@@ -375,7 +379,11 @@ def main(argv: list[str] | None = None) -> int:
             for step in range(args.changes):
                 scale = round(0.5 + 0.02 * step + 0.001, 4)  # new each time, never 1.0
                 for machine in machines:
-                    changes.append((machine.name, scale, machine.change_feed_override(scale)))
+                    seen = machine.change_feed_override(scale)
+                    if seen is None:
+                        result["unseen_changes"] = result.get("unseen_changes", 0) + 1
+                    else:
+                        changes.append((machine.name, scale, seen))
                     time.sleep(0.03)
             result["mqtt_latency_ms"] = summary(latencies(changes, mqtt_arrivals))
             result["opcua_latency_ms"] = summary(latencies(changes, opcua_arrivals))
