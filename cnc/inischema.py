@@ -508,6 +508,34 @@ _SECTIONS = [
         flag("RANDOM_TOOLCHANGER"),
         real("HEARTBEAT_TIMEOUT", 1.0, above=0, high=60),  # ours (nml/safety.py)
     ]),
+    # ours: the bridges (cnc/bridges), each a process the launcher starts when ENABLE = 1.
+    # BROKER, USERNAME, PASSWORD and DRYRUN are also what LinuxCNC's mqtt-publisher
+    # examples substitute into their loadusr line.
+    Section("MQTT", [
+        flag("ENABLE"),  # the machine status publisher
+        text("BROKER", "localhost"),
+        integer("PORT", 1883, low=1, high=65535),
+        text("USERNAME"),
+        text("PASSWORD"),
+        text("DRYRUN"),  # mqtt-publisher's --dryrun, for HAL files
+        text("TOPIC_PREFIX", "cnc"),  # topics: <TOPIC_PREFIX>/<machine name>/...
+        text("MACHINE_NAME"),  # default: [EMC]MACHINE, else the instance
+        real("CYCLE_TIME", 0.1, above=0, high=10),  # seconds between status polls
+        flag("COMMANDS"),  # accept commands on <root>/command (an authenticating broker only)
+    ]),
+    Section("OPCUA", [
+        flag("ENABLE"),  # the OPC UA server
+        text("HOST", "127.0.0.1"),  # 0.0.0.0: every interface
+        integer("PORT", 4840, low=1, high=65535),
+        text("MACHINE_NAME"),  # default: [EMC]MACHINE, else the instance
+        text("USERNAME"),  # the one user who may write (overrides); none: no writes
+        text("PASSWORD"),
+        flag("ALLOW_ANONYMOUS", True),  # anonymous sessions may read, never write
+        text("SECURITY", "None Basic256Sha256_Sign Basic256Sha256_SignAndEncrypt"),
+        path("CERTIFICATE"),  # for the signed policies; none: made once, next to the INI
+        path("PRIVATE_KEY"),
+        real("CYCLE_TIME", 0.1, above=0, high=10),
+    ]),
 ]  # fmt: skip
 SCHEMA: dict[str, Section] = {section.name: section for section in _SECTIONS}
 

@@ -4,7 +4,8 @@ Start-up, in LinuxCNC's order (ARCH-009/010): the NML buffers (this process is t
 the realtime host, iocontrol ([EMCIO]EMCIO, as the userspace HAL component ``iocontrol``),
 [HAL]HALUI (``halui`` is ``cnc.halui``), the HAL files ([HAL]HALFILE, then [HAL]HALCMD
 lines, with ``[SECTION]KEY`` taken from the INI), task ([TASK]TASK), the display
-([DISPLAY]DISPLAY), then [HAL]POSTGUI_HALFILE.
+([DISPLAY]DISPLAY), then [HAL]POSTGUI_HALFILE, then the bridges ([MQTT], [OPCUA]:
+cnc.bridges, restarted when they die, never taking the machine down).
 
 Shut-down, when the display exits or on SIGINT/SIGTERM (ARCH-011): display, task (saves
 parameters and positions), HAL (``unload all``: motion, iocontrol, which saves the tool
@@ -89,6 +90,7 @@ class Launcher:
         self.host: subprocess.Popen[bytes] | None = None
         self.task: subprocess.Popen[bytes] | None = None
         self.display: subprocess.Popen[bytes] | None = None
+        self.bridges = None  # cnc.bridges.supervisor.BridgeSupervisor, once started
         self.is_hal_loaded = False
         self.hal_session = None
         self.is_owner = False
@@ -157,6 +159,7 @@ class Launcher:
             # run HAL files itself, so the launcher does it for it
             self._run_postgui_files()
         write_runtime_info(self.ini_path, nml_file)  # scripts find it from now on
+        self._start_bridges()
         _remember_last_config(self.ini_path)
         say(f"machine ready ({self.ini_path})")
 
@@ -336,6 +339,15 @@ class Launcher:
         except OSError as exc:
             raise LaunchError(f"cannot start [DISPLAY]DISPLAY = {display}: {exc}") from None
 
+    def _start_bridges(self) -> None:
+        """The MQTT and OPC UA bridges the INI enables: UIs, not supervised children."""
+        from cnc.bridges.supervisor import BridgeSupervisor
+
+        self.bridges = BridgeSupervisor(
+            self.config, self.ini_path, self.folder, say, child_setup=die_with_parent
+        )
+        self.bridges.start()
+
     def _wait_for_display_pins(self) -> None:
         """Before POSTGUI_HALFILE: the display's own HAL component must exist, as LinuxCNC's
         GUIs run that file only once their pins are made (ours: ``web`` makes one for its
@@ -383,6 +395,8 @@ class Launcher:
                 self.outbox.error(f"E-stop: {lost.reason}")
             self._make_lost_outputs_safe()
             self.outbox.flush()
+            if self.bridges is not None:
+                self.bridges.check()
             time.sleep(0.05)
         return 0
 
@@ -462,6 +476,8 @@ class Launcher:
         say("shutting down")
         if self.board is not None:
             self.board.begin_shutdown()  # processes leaving now are not lost
+        if self.bridges is not None:
+            self.bridges.stop()
         _terminate(self.display, "display")
         _terminate(self.task, "task", timeout=10)
         if self.is_hal_loaded and self.host is not None and self.host.poll() is None:

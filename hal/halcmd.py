@@ -62,6 +62,7 @@ USERSPACE_TOOLS = {
     "halui": [sys.executable, "-m", "cnc.halui"],
     "mb2hal": [sys.executable, "-m", "hal.modbus.mb2hal"],
     "hy_vfd": [sys.executable, "-m", "hal.modbus.hy_vfd"],
+    "mqtt-publisher": [sys.executable, "-m", "cnc.bridges.mqtt_publisher"],
     # simulated hardware for the sim configs (not LinuxCNC programs)
     "hm2_sim": [sys.executable, "-m", "hal.hm2.sim"],
     "hy_vfd_sim": [sys.executable, "-m", "hal.modbus.vfd_sim"],
