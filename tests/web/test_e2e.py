@@ -65,7 +65,10 @@ def answer_the_door_dialog(page_url: str, hal: Hal) -> None:
     hal.link("web.messages.door", "door-open")
 
     async def run() -> None:
-        async with aiohttp.ClientSession() as session, page(session, page_url + "api/v1/ws") as socket:
+        async with (
+            aiohttp.ClientSession() as session,
+            page(session, page_url + "api/v1/ws") as socket,
+        ):
             driver["door-open"] = True
             shown = await receive_until(socket, lambda m: m["type"] == "dialog")
             assert shown == {

@@ -137,7 +137,11 @@ async def test_a_bad_request_gets_an_error_and_the_server_goes_on(
         assert answer["jsonrpc"] == "2.0" and answer["error"]["code"] == code
         assert answer["error"]["message"].startswith(expected)
         await socket.send_str(_call("flood", on=True))
-        assert await socket.receive_json() == {"jsonrpc": "2.0", "id": 1, "result": {"message": "DONE"}}
+        assert await socket.receive_json() == {
+            "jsonrpc": "2.0",
+            "id": 1,
+            "result": {"message": "DONE"},
+        }
     assert task.next_command()["type"] == "EMC_COOLANT_FLOOD_ON"  # nothing before it
 
 
