@@ -10,8 +10,9 @@ for reference, reading one tuple attribute after a poll. Keys: poll_us_median,
 poll_us_p99, poll_and_position_us_median.
 
 Round trips (issue 19): a real machine (``cnc run --headless`` of a copy of
-tests/task/machine/mill.ini, its own instance) and ``cnc ui web`` on a free loopback port. The no-op command is the feed
-override set to 100 %, which it is: task takes it and answers DONE. Timed, one call after
+tests/task/machine/mill.ini, its own instance) and ``cnc ui web`` on a free loopback port.
+The no-op command is the feed override set to 100 %, which it is: task takes it and
+answers DONE. Timed, one call after
 the other: the Python API (``command.feedrate(1.0)`` + ``wait_complete()``), the JSON-RPC
 call ``feedrate {"percent": 100}`` over the websocket and over HTTP POST (one keep-alive
 connection), and ``api.version`` (answered by the server alone: the API's own cost).
