@@ -83,6 +83,8 @@ class Client:
         """What of a hub message this client subscribed to (None: nothing)."""
         kind = message["type"]
         if kind == "status":
+            if message["data"].keys() <= self.status_fields:
+                return message  # all of it (the page): encoded once for all such clients
             data = {k: v for k, v in message["data"].items() if k in self.status_fields}
             return {"type": "status", "data": data} if data else None
         return message if EVENT_OF_TYPE.get(kind) in self.events else None
