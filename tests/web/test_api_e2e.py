@@ -56,6 +56,7 @@ async def call(socket: aiohttp.ClientWebSocketResponse, method: str, **params: A
 
 
 @pytest.mark.slow
+@pytest.mark.timeout(600)
 def test_clients_drive_and_watch_a_machine_through_the_api(
     machine: Machine, procs: Processes, tmp_path: Path
 ) -> None:
@@ -80,7 +81,7 @@ def the_documented_example_runs(base: str, key: str, folder: Path) -> None:
         [sys.executable, str(script), f"ws://{base.removeprefix('http://')}/api/v1/ws", key],
         capture_output=True, text=True, timeout=120, check=False,
     )  # fmt: skip
-    assert done.returncode == 0, done.stderr
+    assert done.returncode == 0, done.stdout + done.stderr
     lines = done.stdout.splitlines()
     assert lines[0] == "api 1.0"
     assert "at [5.0, -2.0, 10.0]" in lines  # Z homed to HOME = 10
