@@ -149,6 +149,16 @@ class KeyStore:
             self._write(kept)
 
     # ---------------------------------------------------------------- checking
+    def checked(self, key: str) -> Identity | None:
+        """The identity of a key that checked already against this file (fast: no scrypt),
+        or None (unknown yet, or not a key: ``identify`` tells)."""
+        with self._lock:
+            try:
+                self._refresh()
+            except ApiKeyError:
+                return None
+            return self._checked.get(hashlib.sha256(key.encode()).digest())
+
     def identify(self, key: str) -> Identity | None:
         """The identity of a key, or None (unknown, revoked, malformed)."""
         found = KEY_PATTERN.fullmatch(key)

@@ -47,7 +47,16 @@ from urllib.parse import urlsplit
 from aiohttp import WSMsgType, web
 
 import cnc
-from cnc.apikeys import CONFIGURE, LOOPBACK, READ, ApiKeyError, Identity, KeyStore, keys_file_for
+from cnc.apikeys import (
+    CONFIGURE,
+    LOOPBACK,
+    OPERATE,
+    READ,
+    ApiKeyError,
+    Identity,
+    KeyStore,
+    keys_file_for,
+)
 from cnc.ini import IniError
 from cnc.ui.controller import Controller
 from cnc.ui.web.hub import Client, Hub, send
@@ -91,7 +100,9 @@ class Access:
             return Identity("token", LOOPBACK.scopes)
         if self.read_only_token and hmac.compare_digest(given, self.read_only_token):
             return Identity("read-only-token", frozenset({READ}))
-        return False if self.keys is not None else None
+        if self.keys is None:
+            return None
+        return self.keys.checked(given) or False
 
     def identify(self, given: str) -> Identity | None:
         return self.keys.identify(given) if self.keys is not None else None
@@ -190,7 +201,7 @@ async def index(request: web.Request) -> web.StreamResponse:
 
 
 async def config(request: web.Request) -> web.Response:
-    return web.json_response(request.app[HUB].page_config(request[IDENTITY].allows("operate")))
+    return web.json_response(request.app[HUB].page_config(request[IDENTITY].allows(OPERATE)))
 
 
 async def files(request: web.Request) -> web.Response:
