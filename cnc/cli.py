@@ -23,6 +23,7 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "rsh": ("cnc.ui.rsh:main", "LinuxCNC's remote shell, a TCP server (linuxcncrsh, port 5007)"),
     "haltcl": ("hal.haltcl:main", "run a Tcl HAL file, like haltcl (-i INI FILE [ARGS])"),
     "ui": ("cnc.ui.web.server:main", "operator UI in the browser (ui web [INI] [--host --port])"),
+    "api-key": ("cnc.apikeys:main", "the web API's keys (create NAME --scope S|list|revoke NAME)"),
     "latency-test": ("cnc.latency:main", "realtime thread jitter idle and loaded, with a verdict"),
     "bridge": ("cnc.bridges:main", "MQTT or OPC UA bridge of a machine (bridge mqtt|opcua INI)"),
     "inivar": ("cnc.ini:inivar", "print one INI value, like inivar (-var KEY -sec SECTION)"),

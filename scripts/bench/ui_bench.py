@@ -129,21 +129,27 @@ class Writer(threading.Thread):
             time.sleep(self.period * (1 + random.random()))
 
 
+async def subscribe(ws: aiohttp.ClientWebSocketResponse) -> None:
+    """As the page does: every status field and every event (JSON-RPC, API.md)."""
+    for method in ("status.subscribe", "events.subscribe"):
+        await ws.send_json({"jsonrpc": "2.0", "id": method, "method": method})
+
+
 async def measure(url: str, clients: int, seconds: float, writer: Writer) -> dict[str, float]:
     latencies: list[float] = []
     counts = [0] * clients
 
     async def client(number: int, session: aiohttp.ClientSession) -> None:
         async with session.ws_connect(url) as ws:
+            await subscribe(ws)
             deadline = time.perf_counter() + seconds
             while (left := deadline - time.perf_counter()) > 0:
                 try:
                     message = await ws.receive_json(timeout=left)
                 except TimeoutError:
                     break
-                machine = (
-                    message.get("data", {}).get("machine") if message["type"] == "status" else None
-                )
+                is_status = message.get("method") == "notify.status"
+                machine = message["params"].get("machine") if is_status else None
                 if machine and machine[0] in writer.written:
                     latencies.append((time.perf_counter() - writer.written[machine[0]]) * 1000)
                     counts[number] += 1
@@ -163,17 +169,21 @@ async def dialog_latency(url: str, driver: component, count: int, period: float)
     latencies: list[float] = []
 
     async def until(ws: aiohttp.ClientWebSocketResponse, kind: str) -> None:
-        while (await ws.receive_json(timeout=10))["type"] != kind:
+        while (await ws.receive_json(timeout=10)).get("method") != f"notify.{kind}":
             pass
 
     async with aiohttp.ClientSession() as session, session.ws_connect(url) as ws:
+        await subscribe(ws)
         for number in range(count):
             driver["out"] = True
             start = time.perf_counter()
             await until(ws, "dialog")
             latencies.append((time.perf_counter() - start) * 1000)
             driver["out"] = False
-            await ws.send_json({"cmd": "answer", "name": "bench", "is_yes": True, "id": number})
+            answer = {"name": "bench", "is_yes": True}
+            await ws.send_json(
+                {"jsonrpc": "2.0", "id": number, "method": "answer", "params": answer}
+            )
             await until(ws, "dialog_close")
             await asyncio.sleep(period * (1.5 + random.random()))  # the server sees it low
     return {
@@ -220,7 +230,9 @@ def status_part(args: argparse.Namespace) -> dict[str, object]:
                     for clients in [int(word) for word in args.clients.split(",")]:
                         before, start = cpu_seconds(server.pid), time.perf_counter()
                         found = asyncio.run(
-                            measure(f"http://127.0.0.1:{port}/ws", clients, args.seconds, writer)
+                            measure(
+                                f"http://127.0.0.1:{port}/api/v1/ws", clients, args.seconds, writer
+                            )
                         )
                         wall = time.perf_counter() - start
                         used = cpu_seconds(server.pid) - before
@@ -231,7 +243,7 @@ def status_part(args: argparse.Namespace) -> dict[str, object]:
                     hal.new_signal("bench", HAL_BIT)
                     hal.link("driver.out", "bench")
                     hal.link("web.messages.bench", "bench")
-                    url = f"http://127.0.0.1:{port}/ws"
+                    url = f"http://127.0.0.1:{port}/api/v1/ws"
                     period = args.cycle_ms / 1000
                     results["dialogs"] = asyncio.run(
                         dialog_latency(url, driver, args.dialogs, period)

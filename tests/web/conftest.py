@@ -2,8 +2,9 @@
 a real machine with the server as its own process.
 
 ``web`` starts the app (cnc/ui/web/server.py) against the fake task's buffers in
-pytest-aiohttp's test server and returns its client; ``receive_until`` reads a websocket
-until a wanted message arrives. ``machine`` runs ``cnc run --headless`` on a copy of
+pytest-aiohttp's test server and returns its client; ``page`` connects to its API's
+websocket as the page does (``PageSocket``); ``receive_until`` reads a websocket until a
+wanted message arrives. ``machine`` runs ``cnc run --headless`` on a copy of
 tests/task/machine/mill.ini with [DISPLAY] message keys and a program; ``page_url`` starts
 ``cnc ui web`` on it.
 """
@@ -11,6 +12,8 @@ tests/task/machine/mill.ini with [DISPLAY] message keys and a program; ``page_ur
 from __future__ import annotations
 
 import asyncio
+import contextlib
+import itertools
 import shutil
 import signal
 import socket
@@ -19,7 +22,7 @@ import time
 import urllib.error
 import urllib.request
 import weakref
-from collections.abc import Callable, Iterator
+from collections.abc import AsyncIterator, Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -44,6 +47,80 @@ def web(aiohttp_client: Callable[..., Any]) -> Callable[..., Any]:
         return await aiohttp_client(app)
 
     return start
+
+
+API_WS = "/api/v1/ws"
+
+
+class PageSocket:
+    """The API's websocket (JSON-RPC 2.0) as the page's transport (static/js/link.js) sees
+    it, so that the page's tests read as the page's parts: ``send_json({"cmd": NAME,
+    "id"?, ...params})`` is a call of method NAME (without "id": a notification), and
+    ``receive_json()`` gives a response as ``{"type": "result", "id", "status":
+    "DONE"|"ERROR", "message", "is_reported"?, ...result}`` and a notification
+    ``notify.KIND`` as ``{"type": KIND, ...params}`` (a status as ``{"type": "status",
+    "data": params}``). Connecting does what the page does: page.config (a "config"
+    message), status.subscribe (the whole status) and events.subscribe."""
+
+    PUBLIC_NAMES = {"save_program": "files.put"}  # the page's editor saves with files.put
+
+    def __init__(self, socket: aiohttp.ClientWebSocketResponse) -> None:
+        self.socket = socket
+        self._numbers = itertools.count(1)
+
+    async def start(self) -> None:
+        for method in ("page.config", "status.subscribe", "events.subscribe"):
+            await self.socket.send_json({"jsonrpc": "2.0", "id": method, "method": method})
+
+    async def send_json(self, request: dict[str, Any]) -> None:
+        params = {k: v for k, v in request.items() if k not in ("cmd", "id")}
+        method = self.PUBLIC_NAMES.get(request["cmd"], request["cmd"])
+        call = {"jsonrpc": "2.0", "method": method, "params": params}
+        if "id" in request:
+            call["id"] = request["id"]
+        await self.socket.send_json(call)
+
+    async def send_str(self, text: str) -> None:
+        await self.socket.send_str(text)
+
+    async def receive_json(self) -> dict[str, Any]:
+        message = await self.socket.receive_json()
+        method = message.get("method")
+        if method is not None:
+            kind = method.removeprefix("notify.")
+            if kind == "status":
+                return {"type": "status", "data": message["params"]}
+            return {"type": kind, **message["params"]}
+        if message.get("id") == "page.config":
+            return {"type": "config", "data": message["result"]}
+        if message.get("id") == "status.subscribe":
+            return {"type": "status", "data": message["result"]}
+        if "error" in message:
+            error = message["error"]
+            found = {"type": "result", "id": message.get("id"), "status": "ERROR",
+                     "message": error["message"], "code": error["code"]}  # fmt: skip
+            if (error.get("data") or {}).get("is_reported"):
+                found["is_reported"] = True
+            return found
+        result = message["result"] if isinstance(message["result"], dict) else {}
+        return {"type": "result", "id": message["id"], "status": "DONE", "message": "DONE"} | result
+
+    async def close(self) -> None:
+        await self.socket.close()
+
+    @property
+    def closed(self) -> bool:
+        return self.socket.closed
+
+
+@contextlib.asynccontextmanager
+async def page(client: Any, url: str = API_WS, **options: Any) -> AsyncIterator[PageSocket]:
+    """The API's websocket of ``client`` (a test client or an aiohttp session), connected
+    as the page connects."""
+    async with client.ws_connect(url, **options) as socket:
+        found = PageSocket(socket)
+        await found.start()
+        yield found
 
 
 # Messages read from a socket while waiting for another one, by socket: a status change

@@ -22,7 +22,7 @@ import cnc
 from hal.api import HAL_BIT, HAL_OUT, component
 from hal.core import Hal
 from tests.task.test_machine import Machine
-from tests.web.conftest import is_result, receive_until
+from tests.web.conftest import is_result, page, receive_until
 
 
 @pytest.fixture
@@ -41,9 +41,9 @@ def pin(hal: Hal, name: str) -> Any:
 
 async def talk(url: str, request: dict[str, Any]) -> dict[str, Any]:
     """Send one command as a page does; its result."""
-    async with aiohttp.ClientSession() as session, session.ws_connect(url + "ws") as page:
-        await page.send_json(request | {"id": 1})
-        return await receive_until(page, is_result(1))
+    async with aiohttp.ClientSession() as session, page(session, url + "api/v1/ws") as socket:
+        await socket.send_json(request | {"id": 1})
+        return await receive_until(socket, is_result(1))
 
 
 @pytest.mark.slow
@@ -65,9 +65,12 @@ def answer_the_door_dialog(page_url: str, hal: Hal) -> None:
     hal.link("web.messages.door", "door-open")
 
     async def run() -> None:
-        async with aiohttp.ClientSession() as session, session.ws_connect(page_url + "ws") as page:
+        async with (
+            aiohttp.ClientSession() as session,
+            page(session, page_url + "api/v1/ws") as socket,
+        ):
             driver["door-open"] = True
-            shown = await receive_until(page, lambda m: m["type"] == "dialog")
+            shown = await receive_until(socket, lambda m: m["type"] == "dialog")
             assert shown == {
                 "type": "dialog",
                 "name": "door",
@@ -79,9 +82,9 @@ def answer_the_door_dialog(page_url: str, hal: Hal) -> None:
             }
             assert pin(hal, "web.messages.door-waiting") == 1
             assert pin(hal, "web.messages.door-response") == 0
-            await page.send_json({"cmd": "answer", "name": "door", "is_yes": True, "id": 2})
-            assert (await receive_until(page, is_result(2)))["status"] == "DONE"
-            closed = await receive_until(page, lambda m: m["type"] == "dialog_close")
+            await socket.send_json({"cmd": "answer", "name": "door", "is_yes": True, "id": 2})
+            assert (await receive_until(socket, is_result(2)))["status"] == "DONE"
+            closed = await receive_until(socket, lambda m: m["type"] == "dialog_close")
             assert closed["name"] == "door"
 
     try:
@@ -136,21 +139,21 @@ def probe_an_edge(machine: Machine, page_url: str, hal: Hal) -> None:
         assert machine.command.wait_complete(20) == cnc.RCS_DONE
 
         async def run() -> None:
-            url = page_url + "ws"
-            async with aiohttp.ClientSession() as session, session.ws_connect(url) as page:
+            url = page_url + "api/v1/ws"
+            async with aiohttp.ClientSession() as session, page(session, url) as socket:
                 params = {"axis": "X", "direction": 1, "search": 30, "retract": 1,
                           "fast_feed": 300, "slow_feed": 30, "tip_diameter": 2}  # fmt: skip
-                await page.send_json({"cmd": "probe", "kind": "edge", "params": params, "id": 1})
-                assert (await receive_until(page, is_result(1)))["status"] == "DONE"
+                await socket.send_json({"cmd": "probe", "kind": "edge", "params": params, "id": 1})
+                assert (await receive_until(socket, is_result(1)))["status"] == "DONE"
                 done = await receive_until(
-                    page, lambda m: m["type"] == "probe" and m["state"] in ("done", "failed")
+                    socket, lambda m: m["type"] == "probe" and m["state"] in ("done", "failed")
                 )
                 assert done["state"] == "done", done
                 assert done["current"] == len(done["steps"]) == 4
                 assert done["result"]["axes"]["X"] == pytest.approx(21.0, abs=0.02)
                 confirm = {"cmd": "probe_confirm", "system": "G54", "values": {"X": 0}}
-                await page.send_json(confirm | {"id": 2})
-                assert (await receive_until(page, is_result(2)))["status"] == "DONE"
+                await socket.send_json(confirm | {"id": 2})
+                assert (await receive_until(socket, is_result(2)))["status"] == "DONE"
 
         asyncio.run(run())
         machine.until(lambda s: s.g5x_offset[0] == pytest.approx(21.0, abs=0.02))

@@ -16,7 +16,7 @@ from cnc.ui.web.preview import decode
 from cnc.ui.web.server import HUB, HostCheck, make_app
 from cnc.ui.web.settings import Settings
 from tests.task.test_machine import MACHINE
-from tests.web.conftest import is_result, is_status_with, receive_until
+from tests.web.conftest import API_WS, is_result, is_status_with, page, receive_until
 from tests.web.test_server import without_serial
 
 
@@ -61,11 +61,11 @@ async def test_a_forged_host_and_origin_reach_neither_page_nor_websocket_nor_fil
         response = await client.get(path, headers=forged)
         assert response.status == 421, path
         assert "WEB_ALLOWED_HOSTS" in await response.text()
-    assert (await client.get("/ws", headers=forged)).status == 421
+    assert (await client.get(API_WS, headers=forged)).status == 421
     assert (await client.post("/api/upload", headers=forged, data=b"x")).status == 421
     named = {"Host": "cnc.shop:8750", "Origin": "http://cnc.shop:8750"}
     assert (await (await client.get("/api/files", headers=named)).json()) == {"files": ["part.ngc"]}
-    async with client.ws_connect("/ws", headers=named) as socket:
+    async with page(client, headers=named) as socket:
         await socket.send_json({"cmd": "flood", "on": True, "id": 1})
         assert (await receive_until(socket, is_result(1)))["status"] == "DONE"
     assert task.next_command()["type"] == "EMC_COOLANT_FLOOD_ON"  # the only command
@@ -76,7 +76,7 @@ async def test_a_forged_host_and_origin_reach_neither_page_nor_websocket_nor_fil
 async def test_a_continuous_jog_lasts_while_the_page_holds_it(fake_task, web) -> None:
     task = fake_task()
     client = await web()
-    async with client.ws_connect("/ws") as socket:
+    async with page(client) as socket:
         await receive_until(socket, is_status_with("is_connected", True))
         start = {"cmd": "jog", "action": "start", "axis": "X", "direction": 1, "speed": 60}
         await socket.send_json(start | {"id": 1})
@@ -100,7 +100,7 @@ async def test_a_continuous_jog_lasts_while_the_page_holds_it(fake_task, web) ->
 async def test_a_jog_needs_a_speed_above_zero(fake_task, web) -> None:
     task = fake_task()
     client = await web()
-    async with client.ws_connect("/ws") as socket:
+    async with page(client) as socket:
         await receive_until(socket, is_status_with("is_connected", True))
         jog = {"cmd": "jog", "action": "increment", "axis": "X", "direction": 1, "speed": 0}
         await socket.send_json(jog | {"distance": 1, "id": 1})
@@ -140,7 +140,7 @@ def test_the_messages_of_one_refused_move_are_one_notice() -> None:
 async def test_a_refused_mdi_line_is_one_notice_and_no_error_result_notice(fake_task, web) -> None:
     fake_task("--fail", "G1 X1")
     client = await web()
-    async with client.ws_connect("/ws") as socket:
+    async with page(client) as socket:
         await receive_until(socket, is_status_with("is_connected", True))
         await socket.send_json({"cmd": "mdi", "text": "G1 X1", "id": 1})
         result = await receive_until(socket, is_result(1))
@@ -155,7 +155,7 @@ async def test_commands_are_refused_while_the_controller_is_offline_but_stops_ar
     web,
 ) -> None:
     client = await web()
-    async with client.ws_connect("/ws") as socket:
+    async with page(client) as socket:
         await receive_until(socket, is_status_with("is_connected", False))
         await socket.send_json({"cmd": "mdi", "text": "G0 X1", "id": 1})
         result = await receive_until(socket, is_result(1))
@@ -181,7 +181,7 @@ async def test_an_opened_program_is_listed_drawn_and_estimated(
     settings = Settings.load(str(folder / "mill.ini"))
     settings.cycle_time_s = 0.02
     client = await aiohttp_client(make_app(settings))
-    async with client.ws_connect("/ws") as socket:
+    async with page(client) as socket:
         await receive_until(socket, is_status_with("is_connected", True))
         await socket.send_json({"cmd": "open", "file": "part.ngc", "id": 1})
         assert (await receive_until(socket, is_result(1)))["status"] == "DONE"
@@ -207,7 +207,7 @@ async def test_an_opened_program_is_listed_drawn_and_estimated(
 async def test_an_editor_check_reports_every_error(fake_task, web) -> None:
     fake_task()
     client = await web()
-    async with client.ws_connect("/ws") as socket:
+    async with page(client) as socket:
         text = "G21\nG0 X1\nG999\nG1 X2 F100\nM2\n"
         await socket.send_json({"cmd": "check_program", "text": text, "id": 1})
         result = await receive_until(socket, is_result(1))
@@ -233,7 +233,7 @@ async def test_work_offset_commands_become_these_mdi_lines(
 ) -> None:
     task = fake_task()
     client = await web()
-    async with client.ws_connect("/ws") as socket:
+    async with page(client) as socket:
         await receive_until(socket, is_status_with("is_connected", True))
         await socket.send_json(request_fields | {"id": 1})
         assert (await receive_until(socket, is_result(1)))["status"] == "DONE"
@@ -252,7 +252,7 @@ async def test_the_offsets_table_reads_the_parameter_file_and_the_status(
     parameters = tmp_path / "m.var"
     parameters.write_text("5211\t1.5\n5221\t99\n5242\t-4\n5250\t15\n5381\t7\nbad line\n")
     client = await web(Settings(cycle_time_s=0.02, parameter_file=parameters))
-    async with client.ws_connect("/ws") as socket:
+    async with page(client) as socket:
         await receive_until(socket, is_status_with("is_connected", True))
     table = await (await client.get("/api/offsets")).json()
     assert table["active"] == "G54" and table["axes"] == "XYZ"
@@ -274,7 +274,7 @@ async def test_a_spindle_speed_beyond_the_ini_is_refused_and_faster_stays_within
     settings.spindle_limit_keys = {"max": "[SPINDLE_0]MAX_FORWARD_VELOCITY",
                                    "max_reverse": "[SPINDLE_0]MAX_REVERSE_VELOCITY"}  # fmt: skip
     client = await web(settings)
-    async with client.ws_connect("/ws") as socket:
+    async with page(client) as socket:
         await receive_until(socket, is_status_with("is_connected", True))
         await socket.send_json({"cmd": "spindle", "action": "forward", "speed": 12000, "id": 1})
         refused = await receive_until(socket, is_result(1))
@@ -300,7 +300,7 @@ async def test_tools_are_added_and_deleted_in_the_tool_table_file(
     table = tmp_path / "tool.tbl"
     table.write_text("T1 P1 Z10 D6 ;end mill\nT2 P2 Z20 D3 ;drill\n")
     client = await web(Settings(cycle_time_s=0.02, tool_table=table))
-    async with client.ws_connect("/ws") as socket:
+    async with page(client) as socket:
         await receive_until(socket, is_status_with("is_connected", True))
         add = {"cmd": "tool_add", "tool": 7, "z": "12,5", "diameter": 4, "comment": "chamfer"}
         await socket.send_json(add | {"id": 1})
@@ -332,7 +332,7 @@ async def test_the_editor_reads_and_saves_programs_in_the_program_prefix(
     found = await (await client.get("/api/editor?file=part.ngc")).json()
     assert found == {"file": "part.ngc", "text": "G0 X1\nM2\n"}
     assert (await client.get("/api/editor?file=../x.ngc")).status == 404
-    async with client.ws_connect("/ws") as socket:
+    async with page(client) as socket:
         await receive_until(socket, is_status_with("is_connected", True))
         save = {"cmd": "save_program", "file": "new.ngc", "text": "G0 X2\nM2", "id": 1}
         await socket.send_json(save)

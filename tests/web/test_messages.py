@@ -13,7 +13,7 @@ from cnc.ui.web.messages import MessagePin, UserMessage, UserMessages, read_mess
 from cnc.ui.web.settings import Settings
 from hal.api import HAL_BIT, HAL_OUT, HAL_S32, HalError, component
 from hal.core import Hal
-from tests.web.conftest import is_result, receive_until
+from tests.web.conftest import is_result, page, receive_until
 
 GMOCCAPY_STYLE = """\
 [DISPLAY]
@@ -232,26 +232,26 @@ async def test_every_page_sees_the_dialog_and_one_answer_closes_it_everywhere(
     client = await web(Settings(cycle_time_s=0.02, message_pins=pins, problems=problems))
     driver = drive(hal, "web.messages.door", HAL_BIT)
     try:
-        async with client.ws_connect("/ws") as first, client.ws_connect("/ws") as second:
-            for page in (first, second):  # the INI's problems, as error notices
-                notice = await receive_until(page, lambda m: m["type"] == "notice")
+        async with page(client) as first, page(client) as second:
+            for socket in (first, second):  # the INI's problems, as error notices
+                notice = await receive_until(socket, lambda m: m["type"] == "notice")
                 assert notice["kind"] == "error" and "NOPE: no messages" in notice["text"]
             driver["out"] = True
-            for page in (first, second):
-                shown = await receive_until(page, lambda m: m["type"] == "dialog")
+            for socket in (first, second):
+                shown = await receive_until(socket, lambda m: m["type"] == "dialog")
                 assert (shown["name"], shown["kind"], shown["text"]) == (
                     "door",
                     "yesno",
                     "Close the door?",
                 )
             assert value(hal, "web.messages.door-waiting") == 1
-            async with client.ws_connect("/ws") as late:  # a page that connects later
+            async with page(client) as late:  # a page that connects later
                 shown = await receive_until(late, lambda m: m["type"] == "dialog")
                 assert shown["name"] == "door"
             await second.send_json({"cmd": "answer", "name": "door", "is_yes": True, "id": 5})
             assert (await receive_until(second, is_result(5)))["status"] == "DONE"
-            for page in (first, second):
-                closed = await receive_until(page, lambda m: m["type"] == "dialog_close")
+            for socket in (first, second):
+                closed = await receive_until(socket, lambda m: m["type"] == "dialog_close")
                 assert closed["name"] == "door"
             assert value(hal, "web.messages.door-response") == 1
             assert value(hal, "web.messages.door-waiting") == 0
@@ -270,8 +270,8 @@ async def test_without_a_hal_the_pages_are_told_why_there_are_no_message_pins(
     fake_task()
     pins, _ = pins_of(GMOCCAPY_STYLE)
     client = await web(Settings(cycle_time_s=0.02, message_pins=pins))
-    async with client.ws_connect("/ws") as page:
-        notice = await receive_until(page, lambda m: m["type"] == "notice")
+    async with page(client) as socket:
+        notice = await receive_until(socket, lambda m: m["type"] == "notice")
     assert notice == {
         "type": "notice",
         "kind": "error",

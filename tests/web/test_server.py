@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import json
 import sys
 import threading
 from concurrent.futures import ThreadPoolExecutor
@@ -14,7 +15,7 @@ import pytest
 import cnc
 from cnc.ui.web.server import HUB, STATIC, Access
 from cnc.ui.web.settings import Settings
-from tests.web.conftest import is_result, is_status_with, receive_until
+from tests.web.conftest import API_WS, PageSocket, is_result, is_status_with, page, receive_until
 
 pytestmark = pytest.mark.asyncio
 
@@ -30,7 +31,7 @@ def without_serial(command: dict) -> tuple[str, dict]:
 async def test_first_status_is_complete_and_changes_follow(fake_task, web) -> None:
     fake_task()
     client = await web()
-    async with client.ws_connect("/ws") as socket:
+    async with page(client) as socket:
         config = await receive_until(socket, lambda m: m["type"] == "config")
         assert config["data"]["axes"] == "XYZ" and config["data"]["is_control"] is True
         first = await receive_until(socket, is_status_with("is_connected", True))
@@ -51,7 +52,7 @@ async def test_first_status_is_complete_and_changes_follow(fake_task, web) -> No
 async def test_commanded_position_when_the_ini_asks_for_it(fake_task, web) -> None:
     fake_task()
     client = await web(Settings(cycle_time_s=0.02, is_position_actual=False))
-    async with client.ws_connect("/ws") as socket:
+    async with page(client) as socket:
         status = (await receive_until(socket, is_status_with("is_connected", True)))["data"]
         assert status["work"] == [2.5, -3.25, 40.0]
         assert status["machine"] == [12.5, -3.25, 40.0]
@@ -60,7 +61,7 @@ async def test_commanded_position_when_the_ini_asks_for_it(fake_task, web) -> No
 async def test_commands_reach_the_task_and_results_come_back(fake_task, web) -> None:
     task = fake_task()
     client = await web()
-    async with client.ws_connect("/ws") as socket:
+    async with page(client) as socket:
         await socket.send_json({"cmd": "mdi", "text": "G0 X1", "id": 7})
         history = await receive_until(socket, lambda m: m["type"] == "history")
         assert history["lines"] == ["G0 X1"]  # sent to every page, before the result
@@ -95,7 +96,7 @@ async def test_a_refused_command_is_an_error_result_and_a_notice_to_every_page(
 ) -> None:
     fake_task("--fail", "G1 X1")
     client = await web()
-    async with client.ws_connect("/ws") as first, client.ws_connect("/ws") as second:
+    async with page(client) as first, page(client) as second:
         for socket in (first, second):
             await receive_until(socket, is_status_with("is_connected", True))
         await first.send_json({"cmd": "mdi", "text": "G1 X1", "id": 1})
@@ -107,36 +108,47 @@ async def test_a_refused_command_is_an_error_result_and_a_notice_to_every_page(
             assert notice == {"type": "notice", "kind": "error", "text": "failed: G1 X1"}
 
 
+def _call(method: str, **params: object) -> str:
+    return json.dumps({"jsonrpc": "2.0", "method": method, "params": params, "id": 1})
+
+
 @pytest.mark.parametrize(
-    ("request_text", "expected"),
+    ("request_text", "code", "expected"),
     [
-        ("not json", "bad request: not JSON"),
-        ("[1, 2]", "bad request: expected a JSON object"),
-        ('{"cmd": "frobnicate", "id": 1}', "unknown command 'frobnicate'"),
-        ('{"cmd": "feedrate", "percent": "1,2,3", "id": 1}', "feedrate: 'percent': '1,2,3' is not"),
-        ('{"cmd": "estop", "on": "yes", "id": 1}', "estop: 'on' must be true or false"),
-        ('{"cmd": "jog", "action": "start", "axis": "Q", "id": 1}', "jog: unknown axis 'Q'"),
-        ('{"cmd": "mdi", "text": "", "id": 1}', "mdi: 'text' must be a non-empty text"),
+        ("not json", -32700, "parse error"),
+        ('{"cmd": "mdi", "id": 1}', -32600, "invalid request"),
+        (_call("frobnicate"), -32601, "method not found: 'frobnicate'"),
+        (_call("feedrate", percent="1,2,3"), -32000, "feedrate: 'percent': '1,2,3' is not"),
+        (_call("estop", on="yes"), -32602, "estop: 'on' must be of kind bool"),
+        (_call("estop"), -32602, "estop: 'on' is required"),
+        (_call("flood", on=True, colour="blue"), -32602, "flood: unknown parameter 'colour'"),
+        (_call("jog", action="start", axis="Q"), -32000, "jog: unknown axis 'Q'"),
+        (_call("mdi", text=""), -32000, "mdi: 'text' must be a non-empty text"),
     ],
 )
 async def test_a_bad_request_gets_an_error_and_the_server_goes_on(
-    fake_task, web, request_text: str, expected: str
+    fake_task, web, request_text: str, code: int, expected: str
 ) -> None:
     task = fake_task()
     client = await web()
-    async with client.ws_connect("/ws") as socket:
+    async with client.ws_connect(API_WS) as socket:
         await socket.send_str(request_text)
-        result = await receive_until(socket, lambda m: m["type"] == "result")
-        assert result["status"] == "ERROR" and result["message"].startswith(expected)
-        await socket.send_json({"cmd": "flood", "on": True, "id": 2})
-        assert (await receive_until(socket, is_result(2)))["status"] == "DONE"
+        answer = await socket.receive_json()
+        assert answer["jsonrpc"] == "2.0" and answer["error"]["code"] == code
+        assert answer["error"]["message"].startswith(expected)
+        await socket.send_str(_call("flood", on=True))
+        assert await socket.receive_json() == {
+            "jsonrpc": "2.0",
+            "id": 1,
+            "result": {"message": "DONE"},
+        }
     assert task.next_command()["type"] == "EMC_COOLANT_FLOOD_ON"  # nothing before it
 
 
 async def test_two_pages_both_receive_status(fake_task, web) -> None:
     fake_task()
     client = await web()
-    async with client.ws_connect("/ws") as first, client.ws_connect("/ws") as second:
+    async with page(client) as first, page(client) as second:
         await first.send_json({"cmd": "machine", "on": True, "id": 1})
         for socket in (first, second):
             await receive_until(socket, is_status_with("task_state", "ON"))
@@ -145,10 +157,10 @@ async def test_two_pages_both_receive_status(fake_task, web) -> None:
 async def test_a_page_that_disconnects_mid_command_changes_nothing(fake_task, web) -> None:
     task = fake_task()
     client = await web()
-    socket = await client.ws_connect("/ws")
+    socket = PageSocket(await client.ws_connect(API_WS))
     await socket.send_json({"cmd": "mdi", "text": "G0 X5", "id": 1})
     await socket.close()
-    async with client.ws_connect("/ws") as other:  # a marker: the next command task sees
+    async with page(client) as other:  # a marker: the next command task sees
         await asyncio.sleep(0.2)
         await other.send_json({"cmd": "mist", "on": True, "id": 2})
         await receive_until(other, is_result(2))
@@ -159,7 +171,7 @@ async def test_a_page_that_disconnects_mid_command_changes_nothing(fake_task, we
 async def test_a_continuous_jog_of_a_page_that_goes_away_is_stopped(fake_task, web) -> None:
     task = fake_task()
     client = await web()
-    async with client.ws_connect("/ws") as socket:
+    async with page(client) as socket:
         request = {"cmd": "jog", "action": "start", "axis": "X", "direction": 1, "speed": 60}
         await socket.send_json(request | {"id": 1})
         assert (await receive_until(socket, is_result(1)))["status"] == "DONE"
@@ -179,7 +191,7 @@ async def test_programs_are_listed_and_opened_from_the_program_prefix(
     (tmp_path / "notes.txt").write_text("not a program\n")
     client = await web(Settings(cycle_time_s=0.02, program_prefix=tmp_path))
     assert (await (await client.get("/api/files")).json()) == {"files": ["part.ngc"]}
-    async with client.ws_connect("/ws") as socket:
+    async with page(client) as socket:
         await socket.send_json({"cmd": "open", "file": "../part.ngc", "id": 1})
         assert (await receive_until(socket, is_result(1)))[
             "message"
@@ -214,7 +226,7 @@ async def test_requests_without_the_token_get_401(web) -> None:
     client = await web(access=Access("secret", "look"))
     assert (await client.get("/")).status == 401
     assert (await client.get("/?token=wrong")).status == 401
-    assert (await client.get("/ws")).status == 401
+    assert (await client.get(API_WS)).status == 401
     assert (await client.get("/api/config")).status == 401
     assert (await client.get("/?token=secret")).status == 200
     headers = {"Authorization": "Bearer secret"}
@@ -224,7 +236,7 @@ async def test_requests_without_the_token_get_401(web) -> None:
 async def test_a_read_only_token_watches_but_every_command_is_refused(fake_task, web) -> None:
     task = fake_task()
     client = await web(access=Access("secret", "look"))
-    async with client.ws_connect("/ws?token=look") as socket:
+    async with page(client, API_WS + "?token=look") as socket:
         config = await receive_until(socket, lambda m: m["type"] == "config")
         assert config["data"]["is_control"] is False
         await receive_until(socket, is_status_with("is_connected", True))
@@ -234,9 +246,10 @@ async def test_a_read_only_token_watches_but_every_command_is_refused(fake_task,
             "type": "result",
             "id": 1,
             "status": "ERROR",
-            "message": "read-only access: command refused",
+            "message": "estop: needs the operate scope (read-only-token has not)",
+            "code": -32001,
         }
-    async with client.ws_connect("/ws?token=secret") as socket:
+    async with page(client, API_WS + "?token=secret") as socket:
         await socket.send_json({"cmd": "flood", "on": True, "id": 2})
         assert (await receive_until(socket, is_result(2)))["status"] == "DONE"
     assert task.next_command()["type"] == "EMC_COOLANT_FLOOD_ON"  # nothing before it
@@ -244,13 +257,13 @@ async def test_a_read_only_token_watches_but_every_command_is_refused(fake_task,
 
 async def test_a_websocket_from_another_sites_page_is_refused(web) -> None:
     client = await web()
-    response = await client.get("/ws", headers={"Origin": "http://example.com"})
+    response = await client.get(API_WS, headers={"Origin": "http://example.com"})
     assert response.status == 403
 
 
 async def test_without_a_controller_the_page_is_told_and_commands_fail(web) -> None:
     client = await web()
-    async with client.ws_connect("/ws") as socket:
+    async with page(client) as socket:
         status = await receive_until(socket, lambda m: m["type"] == "status")
         assert status["data"]["is_connected"] is False
         await socket.send_json({"cmd": "flood", "on": True, "id": 1})
@@ -302,7 +315,7 @@ async def test_a_tool_edit_rewrites_the_tool_table_and_has_iocontrol_reload_it(
     table = tmp_path / "tool.tbl"
     table.write_text("T1 P1 Z10 D6 ;end mill\nT2 P2 Y0.5 Z20 D3 ;drill\n")
     client = await web(Settings(cycle_time_s=0.02, tool_table=table))
-    async with client.ws_connect("/ws") as socket:
+    async with page(client) as socket:
         edit = {"cmd": "tool_set", "tool": 2, "z": "1,5", "diameter": "6,35", "id": 1}
         await socket.send_json(edit | {"comment": "new\ndrill"})
         assert (await receive_until(socket, is_result(1)))["status"] == "DONE"
@@ -327,7 +340,7 @@ async def test_a_tool_edit_rewrites_the_tool_table_and_has_iocontrol_reload_it(
 async def test_no_tool_edit_without_a_tool_table_file(fake_task, web) -> None:
     fake_task()
     client = await web()
-    async with client.ws_connect("/ws") as socket:
+    async with page(client) as socket:
         await socket.send_json({"cmd": "tool_set", "tool": 1, "z": 1, "diameter": 2, "id": 1})
         refused = await receive_until(socket, is_result(1))
     assert refused["message"] == "tool_set: the INI file names no [EMCIO]TOOL_TABLE"
@@ -341,7 +354,7 @@ async def test_a_macro_runs_its_lines_in_order_and_mdi_lines_are_kept(
     history.write_text("G0 X0\n")
     macros = [{"label": "Zero", "commands": "G0 Z25; X0 Y0"}]
     client = await web(Settings(cycle_time_s=0.02, macros=macros, mdi_history_file=history))
-    async with client.ws_connect("/ws") as socket:
+    async with page(client) as socket:
         config = await receive_until(socket, lambda m: m["type"] == "config")
         assert config["data"]["mdi_history"] == ["G0 X0"]
         assert config["data"]["macros"] == macros
@@ -364,7 +377,7 @@ async def test_a_filtered_program_is_opened_as_the_filters_output(
     settings = Settings(cycle_time_s=0.02, program_prefix=tmp_path, filters=filters)
     settings.extensions = (".ngc", ".py")
     client = await web(settings)
-    async with client.ws_connect("/ws") as socket:
+    async with page(client) as socket:
         await socket.send_json({"cmd": "open", "file": "square.py", "id": 1})
         assert (await receive_until(socket, is_result(1)))["status"] == "DONE"
         await socket.send_json({"cmd": "open", "file": "broken.py", "id": 2})
@@ -382,7 +395,7 @@ async def test_a_stop_is_not_queued_behind_busy_workers(fake_task, web, monkeypa
     blocker = threading.Event()
     hub.executor.submit(blocker.wait)  # every ordinary worker is busy
     try:
-        async with client.ws_connect("/ws") as socket:
+        async with page(client) as socket:
             await socket.send_json({"cmd": "abort", "id": 1})
             assert (await receive_until(socket, is_result(1)))["status"] == "DONE"
     finally:
@@ -423,7 +436,7 @@ async def test_page_commands_become_these_task_commands(
 ) -> None:
     task = fake_task()
     client = await web()
-    async with client.ws_connect("/ws") as socket:
+    async with page(client) as socket:
         await socket.send_json(request_fields | {"id": 1})
         assert (await receive_until(socket, is_result(1)))["status"] == "DONE"
     assert [without_serial(task.next_command()) for _ in expected] == expected
@@ -437,7 +450,7 @@ async def test_commands_of_one_kind_reach_the_task_in_the_order_the_page_sent_th
     task = fake_task()
     client = await web()
     percents = [40, 100, 55, 100, 70, 100]
-    async with client.ws_connect("/ws") as socket:
+    async with page(client) as socket:
         for number, percent in enumerate(percents, 1):
             await socket.send_json({"cmd": "feedrate", "percent": percent, "id": number})
         for number in range(1, len(percents) + 1):

@@ -82,7 +82,7 @@ def test_settings_from_an_ini_file(tmp_path: Path) -> None:
 def test_another_address_without_a_token_refuses_to_start(capsys, monkeypatch) -> None:
     monkeypatch.delenv("CNC_WEB_TOKEN", raising=False)
     assert main(["web", "--host", "0.0.0.0"]) == 2
-    assert "refusing to serve on 0.0.0.0 without a token" in capsys.readouterr().err
+    assert "refusing to serve on 0.0.0.0 without a key" in capsys.readouterr().err
 
 
 def test_the_arguments_must_start_with_web(capsys) -> None:

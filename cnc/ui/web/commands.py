@@ -29,6 +29,7 @@ TIMEOUT_S = 10.0  # how long a command may take before the page is told it still
 PROGRAM_TIMEOUT_S = 3600.0  # an MDI line may be a long move
 WAIT_SLICE_S = 0.5
 FILTER_TIMEOUT_S = 120.0  # a [FILTER] program converting an image may take a while
+MAX_TEXT_BYTES = 8_000_000  # a program sent whole as text (files.get)
 TOOL_FILE_LOCK = threading.Lock()  # one tool edit at a time (the file is read, then written)
 
 
@@ -203,6 +204,27 @@ class Commands:
         if not path.is_relative_to(folder.resolve()) or not path.is_file():
             raise CommandError(f"no program {name!r}")
         return path
+
+    def program_text(self, name: str) -> dict[str, str]:
+        """{"file", "text"} of a program under PROGRAM_PREFIX, at most MAX_TEXT_BYTES."""
+        path = self.program_path(name)
+        if path.stat().st_size > MAX_TEXT_BYTES:
+            raise CommandError(f"{name!r} is larger than {MAX_TEXT_BYTES} bytes")
+        return {"file": name, "text": path.read_bytes().decode("utf-8", "replace")}
+
+    def delete_program(self, name: str) -> None:
+        """Remove a program under PROGRAM_PREFIX; not the one task has open."""
+        path = self.program_path(name)
+        try:
+            open_file = self.stat.file
+        except cnc.error:
+            open_file = ""  # no controller: nothing is open
+        if open_file and Path(open_file).resolve() == path:
+            raise CommandError(f"{name!r} is the open program")
+        try:
+            path.unlink()
+        except OSError as exc:
+            raise CommandError(f"cannot remove {path}: {exc.strerror}") from None
 
     def program_files(self) -> list[str]:
         """Programs under PROGRAM_PREFIX with a [FILTER] extension, relative, sorted."""

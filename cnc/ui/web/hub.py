@@ -1,7 +1,8 @@
-"""The web UI's link to the controller: the status and messages pushed to every page, the
-program's preview and time estimate, program runs, and every request of a page.
+"""The web UI's link to the controller: the status and messages pushed to every client, the
+program's preview and time estimate, program runs, and every command of a client.
 
-``Hub.dispatch(client, request)`` is the one place where a page's requests are handled:
+Clients speak the public API (rpc.py: JSON-RPC 2.0), which calls ``Hub.dispatch(client,
+request)`` for the controller's commands: the one place where they are handled:
 most are controller commands run in worker threads (``commands.py``), a few are answered in
 the event loop (message dialogs, continuous jog refreshes, editor checks, probing). Stops
 (E-stop, abort, the end of a jog) go to worker threads of their own, so they never queue
@@ -29,16 +30,19 @@ from pathlib import Path
 from typing import Any
 
 import cnc
+from cnc.apikeys import OPERATE, Identity
 from cnc.ui.controller import Controller
 from cnc.ui.formatting import MESSAGE_KINDS
 from cnc.ui.web import probing
-from cnc.ui.web.commands import CommandError, Commands
+from cnc.ui.web.commands import CommandError, Commands, tool_comments
 from cnc.ui.web.job import JobTracker
 from cnc.ui.web.jobs import ProgramJobs
 from cnc.ui.web.messages import UserMessages
 from cnc.ui.web.notices import Notices
+from cnc.ui.web.offsets import offsets_table, read_parameters
+from cnc.ui.web.rpc import EVENT_OF_TYPE, Rpc, notification
 from cnc.ui.web.settings import Settings
-from cnc.ui.web.status import DISCONNECTED, diff, snapshot
+from cnc.ui.web.status import DISCONNECTED, FIELDS, diff, snapshot
 from hal.core import HalError
 
 WORKERS = 8  # commands waiting for the controller at once
@@ -54,10 +58,13 @@ ALWAYS_SENT = ("estop", "abort")
 
 @dataclass(eq=False)
 class Client:
-    """One connected page."""
+    """One API client: a websocket (a page, a script), or one HTTP call (no socket)."""
 
-    socket: Any  # web.WebSocketResponse (or anything with send_str, closed)
-    is_control: bool
+    socket: Any  # web.WebSocketResponse (or anything with send_str, closed), None for HTTP
+    identity: Identity
+    # What it subscribed to (rpc.py): status fields, event kinds; nothing at first.
+    status_fields: frozenset[str] = frozenset()
+    events: frozenset[str] = frozenset()
     jogs: dict[int, float] = field(default_factory=dict)  # joint -> last held (monotonic)
     jog_lock: asyncio.Lock = field(default_factory=asyncio.Lock)  # jogs run in order
     # Commands of one kind from one page run in the order it sent them (a slider's 40 %
@@ -68,6 +75,20 @@ class Client:
     def order_lock(self, name: str) -> asyncio.Lock:
         return self.order_locks.setdefault(name, asyncio.Lock())
 
+    @property
+    def is_control(self) -> bool:
+        return self.identity.allows(OPERATE)
+
+    def wants(self, message: dict[str, Any]) -> dict[str, Any] | None:
+        """What of a hub message this client subscribed to (None: nothing)."""
+        kind = message["type"]
+        if kind == "status":
+            if message["data"].keys() <= self.status_fields:
+                return message  # all of it (the page): encoded once for all such clients
+            data = {k: v for k, v in message["data"].items() if k in self.status_fields}
+            return {"type": "status", "data": data} if data else None
+        return message if EVENT_OF_TYPE.get(kind) in self.events else None
+
 
 def is_urgent(request: dict[str, Any]) -> bool:
     """Whether a command stops something: E-stop, abort, the end of a jog."""
@@ -76,8 +97,8 @@ def is_urgent(request: dict[str, Any]) -> bool:
 
 
 async def send(client: Client, text: str) -> None:
-    """Send to a page; a page that went away is dropped, never an error of the server."""
-    if client.socket.closed:
+    """Send to a client; one that went away is dropped, never an error of the server."""
+    if client.socket is None or client.socket.closed:
         return
     with contextlib.suppress(ConnectionError, RuntimeError):
         await client.socket.send_str(text)
@@ -119,6 +140,7 @@ class Hub:
         self._loops: list[asyncio.Task[None]] = []
         self._tasks: set[asyncio.Task[Any]] = set()
         self._position: list[float] | None = None  # machine position of the last poll
+        self.rpc = Rpc(self)  # the public API: every client's requests come through it
         self.handlers: dict[str, Callable[[Client, dict[str, Any]], Awaitable[dict[str, Any]]]]
         self.handlers = {
             "answer": self._answer_dialog,
@@ -206,9 +228,21 @@ class Hub:
                         self.keep(asyncio.create_task(self._stop_jog(client, joint)))
 
     async def broadcast(self, message: dict[str, Any]) -> None:
-        text = json.dumps(message)
+        """A hub message, to every client as far as it subscribed to it."""
+        whole = None  # the text for clients that take all of it, made once
         for client in list(self.clients):
-            await send(client, text)
+            wanted = client.wants(message)
+            if wanted is None:
+                continue
+            if wanted is message:
+                whole = whole or json.dumps(notification(message))
+                await send(client, whole)
+            else:
+                await send(client, json.dumps(notification(wanted)))
+
+    async def notify(self, client: Client, message: dict[str, Any]) -> None:
+        """A hub message to one client, as a notification."""
+        await send(client, json.dumps(notification(message)))
 
     async def start(self, _app: Any = None) -> None:
         if self.messages.pins:
@@ -238,12 +272,9 @@ class Hub:
         self.messages.close()
 
     # ---------------------------------------------------------------- requests
-    async def dispatch(self, client: Client, request: dict[str, Any]) -> dict[str, Any] | None:
-        """Run one request of a page; the result message (None for a request without
-        "id" that went well: jog holds are sent ten times a second)."""
-        answer: dict[str, Any] = {"type": "result", "id": request.get("id")}
-        if not client.is_control:
-            return answer | {"status": "ERROR", "message": "read-only access: command refused"}
+    async def dispatch(self, client: Client, request: dict[str, Any]) -> dict[str, Any]:
+        """Run one command ``{"cmd": NAME, ...arguments}`` of a client whose scope rpc.py
+        checked; its outcome ``{"status": "DONE"|"ERROR", "message", ...}``."""
         name = request.get("cmd")
         handler = self.handlers.get(name) if isinstance(name, str) else None
         if handler is not None:
@@ -263,9 +294,7 @@ class Hub:
                     outcome = await self._execute(request)
         if name in ("mdi", "macro"):
             await self.broadcast({"type": "history", "lines": list(self.commands.mdi_history)})
-        if "id" not in request and outcome.get("status") == "DONE":
-            return None
-        return answer | outcome
+        return outcome
 
     async def _execute(self, request: dict[str, Any]) -> dict[str, Any]:
         loop = asyncio.get_running_loop()
@@ -318,7 +347,7 @@ class Hub:
             await self._execute({"cmd": "jog", "action": "stop", "joint": joint})
         if not client.socket.closed:
             text = "jog stopped: the page stopped holding it (a key or button released late?)"
-            await send(client, json.dumps({"type": "notice", "kind": "error", "text": text}))
+            await self.notify(client, {"type": "notice", "kind": "error", "text": text})
 
     async def disconnected(self, client: Client) -> None:
         self.clients.discard(client)
@@ -429,16 +458,54 @@ class Hub:
             "jog_hold_s": JOG_HOLD_S,
         }
 
-    def greeting(self, client: Client) -> list[dict[str, Any]]:
-        """What a page gets when it connects."""
-        found: list[dict[str, Any]] = [
-            {"type": "config", "data": self.page_config(client.is_control)},
-            {"type": "status", "data": self.status},
-            {"type": "jobs", "jobs": self.tracker.history},
-        ]
-        if self.jobs.current is not None:
+    def status_fields(self) -> frozenset[str]:
+        """The names of every status field (status.py's snapshot, and the job)."""
+        return frozenset(FIELDS) | {"job"}
+
+    def event_state(self, kinds: frozenset[str]) -> list[dict[str, Any]]:
+        """What a client that subscribes to these event kinds gets at once: the state
+        they describe now (the server's problems as notices)."""
+        found: list[dict[str, Any]] = []
+        if "jobs" in kinds:
+            found.append({"type": "jobs", "jobs": self.tracker.history})
+        if "program" in kinds and self.jobs.current is not None:
             found.append({"type": "program", **self.program_state(self.jobs.current.state())})
-        if self.probe.state != "idle":
+        if "probe" in kinds and self.probe.state != "idle":
             found.append(self.probe.message_for_pages())
-        found += [{"type": "notice", "kind": "error", "text": text} for text in self.problems]
-        return found + self.messages.open_dialogs()
+        if "notice" in kinds:
+            found += [{"type": "notice", "kind": "error", "text": text} for text in self.problems]
+        if "dialog" in kinds:
+            found += self.messages.open_dialogs()
+        return found
+
+    async def in_worker(self, function: Callable[..., Any], *args: Any) -> Any:
+        """``function(*args)`` in a worker thread (file and controller access)."""
+        return await asyncio.get_running_loop().run_in_executor(self.executor, function, *args)
+
+    async def tools(self) -> dict[str, Any]:
+        """The tool table (iocontrol's, through stat.tool_table; index 0 is the spindle),
+        with the comments of the tool table file."""
+        try:
+            table = self.controller.poll().tool_table
+        except cnc.error:
+            table = ()
+        settings = self.settings
+        comments = await self.in_worker(
+            tool_comments, settings.tool_table, settings.is_random_toolchanger
+        )
+        entries = [
+            {"tool": entry.id, "index": index, "z": entry.zoffset, "x": entry.xoffset,
+             "diameter": entry.diameter, "comment": comments.get(entry.id, "")}
+            for index, entry in enumerate(table)
+            if entry.id > 0 and (index > 0 or settings.is_random_toolchanger)  # 0: the spindle
+        ]  # fmt: skip
+        return {"tools": entries}
+
+    async def offsets(self) -> dict[str, Any]:
+        """The work offsets table (offsets.py)."""
+        try:
+            stat = self.controller.poll()
+        except cnc.error:
+            stat = None
+        parameters = await self.in_worker(read_parameters, self.settings.parameter_file)
+        return offsets_table(parameters, stat, self.settings.axes)

@@ -1,34 +1,31 @@
 """``cnc ui web [INI] [--host H] [--port P] [--token T] [--read-only-token R]``: the operator
-UI in the browser (issue 7, issue 18, GUI-*).
+UI in the browser (issue 7, issue 18, GUI-*) and the public API (issue 19, API.md).
 
 One process attaches to the controller like any UI (``cnc.stat``, ``cnc.command``,
-``cnc.error_channel``) and serves the page (``static/``) and a websocket, ``/ws``:
+``cnc.error_channel``) and serves the page (``static/``) and the API, JSON-RPC 2.0
+(rpc.py), which the page uses too:
 
-- server -> page: ``{"type": "status", "data": {...}}`` (the first one complete, then only
-  the fields that changed, every [DISPLAY]CYCLE_TIME; ``job`` is the running program's
-  progress), ``{"type": "notice", "kind": "error"|"text"|"display", "text", "details"?}``
-  (one per event, notices.py), ``{"type": "result", "id", "status": "DONE"|"ERROR",
-  "message"}`` for each command, ``{"type": "history", "lines"}`` (MDI), ``{"type":
-  "program", ...}`` what is known of the open program (preview points so far, its error,
-  the time estimate: jobs.py), ``{"type": "jobs", "jobs"}`` the run history (job.py),
-  ``{"type": "probe", ...}`` a probing helper's steps (probing.py), ``{"type": "dialog",
-  ...}`` / ``{"type": "dialog_close", "name"}`` for [DISPLAY] message dialogs (messages.py).
-- page -> server: ``{"cmd": NAME, "id": ..., ...arguments}``, all handled by
-  ``Hub.dispatch`` (hub.py; the controller commands are in commands.py).
+- ``/api/v1/ws``: a websocket; calls in, their responses and the notifications a client
+  subscribed to out (``notify.status``: the status fields that changed, every
+  [DISPLAY]CYCLE_TIME; ``notify.notice``: the error channel; ...).
+- ``POST /api/v1/rpc``: one call or a batch per request (``application/json``).
 
-HTTP: ``/`` the page, ``/static/*`` its assets, ``/api/config`` what the page offers (from
-the INI), ``/api/files`` the programs of PROGRAM_PREFIX, ``/api/program/text`` the open
-program's text, ``/api/preview/data`` its toolpath (binary, preview.RECORD), both for the
-program ``number`` the "program" message names, ``/api/tools`` the tool table,
-``/api/offsets`` the work offsets, ``/api/editor?file=`` a program's text for the editor,
-``POST /api/upload`` a program into PROGRAM_PREFIX.
+HTTP for the page's bulk data: ``/`` the page, ``/static/*`` its assets, ``/api/config``
+what the page offers (from the INI), ``/api/files`` the programs of PROGRAM_PREFIX,
+``/api/program/text`` the open program's text, ``/api/preview/data`` its toolpath (binary,
+preview.RECORD), both for the program ``number`` the "program" notification names,
+``/api/tools`` the tool table, ``/api/offsets`` the work offsets, ``/api/editor?file=`` a
+program's text for the editor, ``POST /api/upload`` a program into PROGRAM_PREFIX.
 
-Access: 127.0.0.1 by default; any other address needs a token (``--token`` or
-$CNC_WEB_TOKEN). With a token, every request needs it (``?token=``, ``Authorization:
-Bearer``, or the cookie the server sets on the first request that had it), else 401. A
-read-only token ($CNC_WEB_READ_ONLY_TOKEN) may watch; its commands are refused. Websockets
-and uploads from another site's page (Origin not this server) are refused. A request whose
-Host is not the address the server is bound to, ``localhost`` or a name of
+Access: each request is someone (apikeys.Identity) with scopes. A server bound to a
+loopback address (127.0.0.1 by default) lets requests without a key in with every scope;
+any other address needs a key for every request. A key is a named API key of the keys
+file next to the INI (``cnc api-key``), or one of the two tokens of the command line
+(``--token``/$CNC_WEB_TOKEN: every scope; ``--read-only-token``/$CNC_WEB_READ_ONLY_TOKEN:
+read), given as ``Authorization: Bearer KEY``, ``?token=KEY`` or the cookie the server
+sets on the first request that had it; a wrong key gets 401 anywhere. Websockets, uploads
+and API calls from another site's page (Origin not this server) are refused. A request
+whose Host is not the address the server is bound to, ``localhost`` or a name of
 [DISPLAY]WEB_ALLOWED_HOSTS is refused (421): a page of another site that re-binds its own
 name to 127.0.0.1 (DNS rebinding) would otherwise be "same origin" and could drive the
 machine.
@@ -40,23 +37,30 @@ import argparse
 import asyncio
 import hmac
 import ipaddress
-import json
 import os
 import sys
 from collections.abc import Awaitable, Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from urllib.parse import urlsplit
 
 from aiohttp import WSMsgType, web
 
 import cnc
+from cnc.apikeys import (
+    CONFIGURE,
+    LOOPBACK,
+    OPERATE,
+    READ,
+    ApiKeyError,
+    Identity,
+    KeyStore,
+    keys_file_for,
+)
 from cnc.ini import IniError
 from cnc.ui.controller import Controller
-from cnc.ui.web.commands import tool_comments
 from cnc.ui.web.hub import Client, Hub, send
 from cnc.ui.web.jobs import RECORD_SIZE
-from cnc.ui.web.offsets import offsets_table, read_parameters
 from cnc.ui.web.settings import Settings
 
 STATIC = Path(__file__).with_name("static")
@@ -68,30 +72,40 @@ MAX_EDITOR_BYTES = 2_000_000  # the editor takes programs up to this size
 MAX_PREVIEW_CHUNK = 65_536  # toolpath records per /api/preview/data answer (1 MB)
 WEBSOCKET_MAX_MESSAGE = 8_000_000  # an editor's text, saved or checked
 HUB = web.AppKey("hub", Hub)
-IS_CONTROL = web.RequestKey("is_control", bool)  # the request may send commands
+IDENTITY = web.RequestKey("identity", Identity)  # who the request is, with which scopes
 
 
 # ------------------------------------------------------------------ access
 @dataclass(frozen=True)
 class Access:
-    """The tokens: none (everyone may control), or control and/or read-only ones."""
+    """Who may come in: with ``is_open`` (a loopback server) anyone without a key; with a
+    key, the command line's tokens (``token``: every scope, ``read_only_token``: read)
+    and the named keys of ``keys`` (the keys file)."""
 
     token: str | None = None
     read_only_token: str | None = None
+    keys: KeyStore | None = None
+    is_open: bool = True
 
     @property
     def is_required(self) -> bool:
-        return bool(self.token or self.read_only_token)
+        return not self.is_open or bool(self.token or self.read_only_token)
 
-    def role(self, given: str | None) -> str | None:
-        """ "control", "watch" or None (refused) for a request bringing ``given``."""
-        if not self.is_required:
-            return "control"
-        if given and self.token and hmac.compare_digest(given, self.token):
-            return "control"
-        if given and self.read_only_token and hmac.compare_digest(given, self.read_only_token):
-            return "watch"
-        return None
+    def cached(self, given: str | None) -> Identity | bool | None:
+        """The identity of a request bringing ``given`` when it is known at once; False
+        when only the keys file can tell (``identify``, in a worker: scrypt is slow)."""
+        if not given:
+            return None if self.is_required else LOOPBACK
+        if self.token and hmac.compare_digest(given, self.token):
+            return Identity("token", LOOPBACK.scopes)
+        if self.read_only_token and hmac.compare_digest(given, self.read_only_token):
+            return Identity("read-only-token", frozenset({READ}))
+        if self.keys is None:
+            return None
+        return self.keys.checked(given) or False
+
+    def identify(self, given: str) -> Identity | None:
+        return self.keys.identify(given) if self.keys is not None else None
 
 
 def given_token(request: web.Request) -> tuple[str | None, bool]:
@@ -166,12 +180,15 @@ def access_middleware(
                 "[DISPLAY]WEB_ALLOWED_HOSTS to reach the machine by it)\n",
             )
         token, is_explicit = given_token(request)
-        role = access.role(token)
-        if role is None:
-            return web.Response(status=401, text="401: a valid token is required\n")
-        request[IS_CONTROL] = role == "control"
+        identity = access.cached(token)
+        if identity is False:
+            loop = asyncio.get_running_loop()
+            identity = await loop.run_in_executor(None, access.identify, token)
+        if not isinstance(identity, Identity):
+            return web.Response(status=401, text="401: a valid key is required\n")
+        request[IDENTITY] = identity
         response = await handler(request)
-        if access.is_required and is_explicit and token and not response.prepared:
+        if is_explicit and token and not response.prepared:
             response.set_cookie(COOKIE, token, httponly=True, samesite="Strict")
         return response
 
@@ -184,7 +201,7 @@ async def index(request: web.Request) -> web.StreamResponse:
 
 
 async def config(request: web.Request) -> web.Response:
-    return web.json_response(request.app[HUB].page_config(request[IS_CONTROL]))
+    return web.json_response(request.app[HUB].page_config(request[IDENTITY].allows(OPERATE)))
 
 
 async def files(request: web.Request) -> web.Response:
@@ -240,39 +257,11 @@ def read_range(path: Path, start: int, size: int) -> bytes:
 
 
 async def tools(request: web.Request) -> web.Response:
-    """The tool table (iocontrol's, through stat.tool_table; index 0 is the spindle), with
-    the comments of the tool table file."""
-    hub = request.app[HUB]
-    try:
-        table = hub.controller.poll().tool_table
-    except cnc.error:
-        table = ()
-    settings = hub.settings
-    loop = asyncio.get_running_loop()
-    comments = await loop.run_in_executor(
-        hub.executor, tool_comments, settings.tool_table, settings.is_random_toolchanger
-    )
-    entries = [
-        {"tool": entry.id, "index": index, "z": entry.zoffset, "x": entry.xoffset,
-         "diameter": entry.diameter, "comment": comments.get(entry.id, "")}
-        for index, entry in enumerate(table)
-        if entry.id > 0 and (index > 0 or settings.is_random_toolchanger)  # 0: the spindle
-    ]  # fmt: skip
-    return web.json_response({"tools": entries})
+    return web.json_response(await request.app[HUB].tools())
 
 
 async def offsets(request: web.Request) -> web.Response:
-    """The work offsets table (offsets.py)."""
-    hub = request.app[HUB]
-    try:
-        stat = hub.controller.poll()
-    except cnc.error:
-        stat = None
-    loop = asyncio.get_running_loop()
-    parameters = await loop.run_in_executor(
-        hub.executor, read_parameters, hub.settings.parameter_file
-    )
-    return web.json_response(offsets_table(parameters, stat, hub.settings.axes))
+    return web.json_response(await request.app[HUB].offsets())
 
 
 async def editor_text(request: web.Request) -> web.Response:
@@ -295,8 +284,8 @@ async def editor_text(request: web.Request) -> web.Response:
 
 async def upload(request: web.Request) -> web.Response:
     """A program sent by the page (multipart field "file"), saved in PROGRAM_PREFIX."""
-    if not request[IS_CONTROL]:
-        raise web.HTTPForbidden(text="403: read-only access\n")
+    if not request[IDENTITY].allows(CONFIGURE):
+        raise web.HTTPForbidden(text="403: an upload needs the configure scope\n")
     if not is_same_origin(request):
         raise web.HTTPForbidden(text="403: upload from another site\n")
     settings = request.app[HUB].settings
@@ -323,17 +312,17 @@ def save_whole(target: Path, data: bytes) -> None:
 
 
 async def websocket(request: web.Request) -> web.WebSocketResponse:
+    """``/api/v1/ws``: JSON-RPC 2.0 both ways (rpc.py); each message is answered in a task
+    of its own, so a stop never waits for the answer to an earlier call."""
     if not is_same_origin(request):
         raise web.HTTPForbidden(text="403: websocket from another site\n")
     hub = request.app[HUB]
     socket = web.WebSocketResponse(heartbeat=20, max_msg_size=WEBSOCKET_MAX_MESSAGE)
     await socket.prepare(request)
-    client = Client(socket, request[IS_CONTROL])
+    client = Client(socket, request[IDENTITY])
     hub.clients.add(client)
     tasks: set[asyncio.Task[None]] = set()
     try:
-        for message in hub.greeting(client):
-            await send(client, json.dumps(message))
         async for message in socket:
             if message.type != WSMsgType.TEXT:
                 continue
@@ -347,19 +336,24 @@ async def websocket(request: web.Request) -> web.WebSocketResponse:
 
 
 async def _answer(hub: Hub, client: Client, text: str) -> None:
-    """Parse and run one request; a bad one gets an ERROR result, never a crash."""
-    try:
-        request = json.loads(text)
-    except ValueError as exc:
-        request, problem = {}, f"bad request: not JSON ({exc})"
-    else:
-        problem = None if isinstance(request, dict) else "bad request: expected a JSON object"
-    if problem is not None:
-        reply = {"type": "result", "id": None, "status": "ERROR", "message": problem}
-    else:
-        reply = await hub.dispatch(client, request)
+    reply = await hub.rpc.handle(client, text)
     if reply is not None:
-        await send(client, json.dumps(reply))
+        await send(client, reply)
+
+
+async def rpc_post(request: web.Request) -> web.Response:
+    """``POST /api/v1/rpc``: one call or a batch; 204 when all were notifications. Only
+    ``application/json`` (a browser cannot send that to another site without asking it
+    first, CORS), and never from another site's page."""
+    if not is_same_origin(request):
+        raise web.HTTPForbidden(text="403: API call from another site\n")
+    if request.content_type != "application/json":
+        raise web.HTTPUnsupportedMediaType(text="415: send application/json\n")
+    hub = request.app[HUB]
+    reply = await hub.rpc.handle(Client(None, request[IDENTITY]), await request.read())
+    if reply is None:
+        return web.Response(status=204)
+    return web.Response(text=reply, content_type="application/json")
 
 
 def make_app(
@@ -371,6 +365,8 @@ def make_app(
     """The web application for one controller (``source``: INI/NML file or None), bound
     to ``hosts.bound`` (default 127.0.0.1; its allowed names from the settings)."""
     hosts = hosts or HostCheck(DEFAULT_HOST, settings.allowed_hosts)
+    if access.keys is None and settings.ini_file is not None:
+        access = replace(access, keys=KeyStore(keys_file_for(settings.ini_file)))
     app = web.Application(
         middlewares=[access_middleware(access, hosts)], client_max_size=MAX_UPLOAD_BYTES
     )
@@ -379,7 +375,8 @@ def make_app(
     app.on_startup.append(hub.start)
     app.on_cleanup.append(hub.stop)
     app.router.add_get("/", index)
-    app.router.add_get("/ws", websocket)
+    app.router.add_get("/api/v1/ws", websocket)
+    app.router.add_post("/api/v1/rpc", rpc_post)
     app.router.add_get("/api/config", config)
     app.router.add_get("/api/files", files)
     app.router.add_get("/api/program/text", program_text)
@@ -437,21 +434,26 @@ def main(argv: list[str]) -> int:
         print("usage: cnc ui web [INI] [--host H] [--port P] [--token T]", file=sys.stderr)
         return 2
     args = _parser().parse_args(argv[1:])
-    if not is_loopback(args.host) and not args.token:
-        print(
-            f"cnc ui web: refusing to serve on {args.host} without a token: give --token or "
-            f"set ${TOKEN_ENV} (only 127.0.0.1 may go without one)",
-            file=sys.stderr,
-        )
-        return 2
     try:
         ini = args.ini or running_ini()
         settings = Settings.load(ini) if ini else Settings()
-    except (cnc.error, IniError) as exc:  # IniError: "file:line: cause"
+        keys = KeyStore(keys_file_for(ini)) if ini else None
+        has_keys = keys is not None and keys.has_keys()
+    except (cnc.error, IniError, ApiKeyError) as exc:  # "file:line: cause"
         print(f"cnc ui web: {exc}", file=sys.stderr)
         return 2
+    is_open = is_loopback(args.host)
+    if not is_open and not (args.token or has_keys):
+        print(
+            f"cnc ui web: refusing to serve on {args.host} without a key: create one "
+            f"(cnc api-key create NAME --scope operate), give --token or set ${TOKEN_ENV} "
+            "(only a loopback address may go without one)",
+            file=sys.stderr,
+        )
+        return 2
     hosts = HostCheck(args.host, settings.allowed_hosts)
-    app = make_app(settings, args.ini, Access(args.token, args.read_only_token), hosts)
+    access = Access(args.token, args.read_only_token, keys, is_open)
+    app = make_app(settings, args.ini, access, hosts)
     print(f"cnc ui web: serving http://{args.host}:{args.port}/", flush=True)
     # SIGINT/SIGTERM stop it; pages are closed by Hub.stop, so the shutdown need not wait.
     web.run_app(

@@ -103,6 +103,52 @@ def snapshot(s: Any, settings: Settings) -> dict[str, Any]:
     }
 
 
+# Every field of a snapshot (the API's status fields; the hub adds "job")
+FIELDS = (
+    "is_connected",
+    "task_state",
+    "task_mode",
+    "interp_state",
+    "exec_state",
+    "is_estop",
+    "is_enabled",
+    "axes",
+    "work",
+    "machine",
+    "dtg",
+    "joint_position",
+    "homed",
+    "homing",
+    "is_all_homed",
+    "limit",
+    "g5x",
+    "gcodes",
+    "mcodes",
+    "feed",
+    "speed",
+    "velocity",
+    "tool",
+    "tool_offset",
+    "feedrate",
+    "rapidrate",
+    "spindle_override",
+    "spindle_speed",
+    "spindle_direction",
+    "is_flood",
+    "is_mist",
+    "file",
+    "current_line",
+    "motion_line",
+    "is_optional_stop",
+    "is_block_delete",
+    "is_paused",
+    "is_program_stop",
+    "program_units",
+    "rotation_xy",
+    "queued_mdi",
+)
+
+
 DISCONNECTED: dict[str, Any] = {"is_connected": False}
 
 

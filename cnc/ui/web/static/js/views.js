@@ -327,7 +327,7 @@ $("editor-load").onclick = () => loadEditor();
 async function save(isOpening) {
   const file = $("editor-file").value.trim();
   if (!file) { notice("error", "give the program a name, e.g. part.ngc"); return; }
-  const result = await send("save_program", { file, text: editor.value });
+  const result = await send("files.put", { file, text: editor.value });
   if (result.status !== "DONE") return;
   $("editor-state").textContent = `saved ${new Date().toLocaleTimeString()}`;
   if (isOpening) send("open", { file });
