@@ -128,6 +128,7 @@ class Task:
         self.setup: MachineSetup = load_setup(ini)
         self.nml = nml
         self.stat = emc.EMC_STAT()
+        self.stat.status = RCS_STATUS.DONE  # idle with no command yet, as LinuxCNC's task
         canon_setup = CanonSetup(
             linear_units=self.setup.linear_units,
             axis_mask=self.setup.axis_mask,
