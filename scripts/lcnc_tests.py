@@ -14,6 +14,7 @@ through a folder of wrappers put first on ``PATH`` and a module folder on ``PYTH
     halsampler -> cnc hal sample halstreamer -> cnc hal stream
     rs274 -> cnc rs274           linuxcncrsh -> cnc rsh      realtime -> cnc hal realtime
     python3 -> this Python (its ``import hal`` is ours)   import linuxcnc -> import cnc
+    import gcode -> task.interp.python.gcode (LinuxCNC's preview interpreter module)
 
 Tests outside the project's scope (halcompile and C builds, Mesa hm2 hardware, Modbus
 hardware, classicladder, Tk/GTK/Qt GUIs, LinuxCNC's uspace internals) are listed as
@@ -121,6 +122,10 @@ def make_shims(folder: Path, checkout: Path) -> tuple[Path, Path]:
     (py_dir / "linuxcnc.py").write_text(
         '"""LinuxCNC\'s Python module name, mapped to ours."""\n'
         "import sys\n\nimport cnc\n\nsys.modules[__name__] = cnc\n"
+    )
+    (py_dir / "gcode.py").write_text(
+        '"""LinuxCNC\'s preview interpreter module, mapped to ours."""\n'
+        "import sys\n\nfrom task.interp.python import gcode\n\nsys.modules[__name__] = gcode\n"
     )
     if (checkout / UTIL_MODULE).is_file():
         shutil.copy(checkout / UTIL_MODULE, py_dir)
