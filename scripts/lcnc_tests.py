@@ -285,6 +285,9 @@ def cleanup(env: dict[str, str]) -> None:
     subprocess.run(
         [sys.executable, "-m", "cnc", "halrun", "-U"], env=env, capture_output=True, timeout=60
     )
+    # the NML buffers and semaphores of a machine killed at the timeout
+    for leftover in Path("/dev/shm").glob(f"*.{env['CNC_INSTANCE']}.*"):
+        leftover.unlink(missing_ok=True)
 
 
 def main(argv: list[str] | None = None) -> int:
