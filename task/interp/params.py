@@ -106,12 +106,13 @@ class ParamsMixin:
             self.origin_offset,
             self.tool_offset,
         )
-        x, y = rotate(cur[0] + axis[0], cur[1] + axis[1], self.rotation_xy)
-        return [
-            x + origin[0] + tool[0],
-            y + origin[1] + tool[1],
-            *(cur[k] + axis[k] + origin[k] + tool[k] for k in range(2, 9)),
-        ]
+        # (read on every line: one pass over the axes; X and Y again only under rotation)
+        position = [c + a + o + t for c, a, o, t in zip(cur, axis, origin, tool, strict=True)]
+        if self.rotation_xy:
+            x, y = rotate(cur[0] + axis[0], cur[1] + axis[1], self.rotation_xy)
+            position[0] = x + origin[0] + tool[0]
+            position[1] = y + origin[1] + tool[1]
+        return position
 
     # ------------------------------------------------------------- var files
     def restore_parameters(self, filename: str) -> None:
