@@ -15,9 +15,10 @@ import os
 import signal
 import sys
 import time
+from pathlib import Path
 
 from hal.core import Hal, HalError, release_hal_mutex, remove_hal_objects
-from hal.halcmd import VERBOSITY_ERRORS, make_session, parse_options, run_session
+from hal.halcmd import VERBOSITY_ERRORS, HalCmd, make_session, parse_options, run_session
 from hal.rtapi_app import HostClient, release_if_unused
 from nml.shmem import is_process_alive
 
@@ -80,6 +81,9 @@ def main(argv: list[str] | None = None) -> int:
     if rest:
         print(f"halrun: too many arguments <{' '.join(rest)}>", file=sys.stderr)
         return 1
+    is_ini = bool(opts["file"]) and opts["file"].endswith(".ini")
+    if is_ini and not opts["ini"]:
+        opts["ini"] = opts["file"]  # its values serve the HAL files' [SECTION]KEY
     if opts["release_mutex"]:
         release_hal_mutex()
     try:
@@ -102,7 +106,9 @@ def main(argv: list[str] | None = None) -> int:
         except HalError as exc:
             print(f"halrun: {exc}", file=sys.stderr)
             return 1
-        if opts["file"]:
+        if is_ini:
+            status = run_twopass_ini(session, opts["file"])
+        elif opts["file"]:
             status = run_session(session, opts, [])
         if is_interactive or not opts["file"]:
             session.is_keep_going = True
@@ -118,3 +124,22 @@ def main(argv: list[str] | None = None) -> int:
         release_if_unused(session.hal)
         session.hal.close()
     return status
+
+
+def run_twopass_ini(session: HalCmd, filename: str) -> int:
+    """``halrun FILE.ini``: the INI file's ``[HAL]HALFILE`` entries, in two passes; as
+    LinuxCNC's halrun, only for an INI file that sets ``[HAL]TWOPASS``."""
+    from cnc.halfiles import find_halfiles, run_halfiles
+
+    ini = session.ini
+    twopass = ini.find("HAL", "TWOPASS")
+    if twopass is None:
+        print("halrun: An INI file may only be used if it specifies [HAL]TWOPASS")
+        return 1
+    try:
+        halfiles = find_halfiles(ini, Path(filename).absolute().parent, [])
+        is_ok = run_halfiles(session, ini, halfiles, say=lambda _: None, twopass=twopass or "on")
+    except HalError as exc:
+        print(f"halrun: {exc}", file=sys.stderr)
+        return 1
+    return 0 if is_ok else 1

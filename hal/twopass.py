@@ -20,6 +20,7 @@ Tcl command of that verb, so ``setp`` values go through ``expr`` as in LinuxCNC.
 
 from __future__ import annotations
 
+import os
 import sys
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -108,6 +109,7 @@ class TwoPass:
         self.ini = ini
         self.files = list(files)
         self.is_verbose = "verbose" in options.lower()
+        self.options = [word for word in ("verbose", "nodelete") if word in options.lower()]
         self.haltcl = HalTcl(session, ini)
         self.haltcl.tcl.eval("namespace eval ::tp {}")
         self.haltcl.tcl.createcommand("::haltcl::pass0", self._pass0_verb)
@@ -118,6 +120,10 @@ class TwoPass:
 
     def run(self) -> bool:
         """Both passes; False (errors printed as ``file:line: cause``) when one failed."""
+        # what LinuxCNC's twopass always prints (its tests compare it)
+        print(f"twopass:invoked with <{' '.join(self.options)}> options")
+        for halfile in self.files:
+            print(f"twopass:found {_as_found(halfile.path)}")
         runnable = []
         for halfile in self.files:
             if halfile.path.suffix == ".hal" and _is_excluded(halfile.path):
@@ -283,6 +289,15 @@ class TwoPass:
     def _verbose(self, text: str) -> None:
         if self.is_verbose:
             print(f"twopass: {text}", flush=True)
+
+
+def _as_found(path: Path) -> str:
+    """A HAL file's path as LinuxCNC's search names it: ``./NAME`` in the current folder
+    (the configuration's), else the full path."""
+    try:
+        return os.path.join(".", path.absolute().relative_to(Path.cwd().absolute()))
+    except ValueError:
+        return str(path)
 
 
 def _is_excluded(path: Path) -> bool:

@@ -264,8 +264,10 @@ class ToolTable:
                 else:
                     if strict and entry.toolno <= 0:
                         raise ValueError(f"tool number {entry.toolno} must be positive")
-                    if strict and entry.pocketno <= 0:
-                        raise ValueError(f"pocket {entry.pocketno} must be positive")
+                    # (LinuxCNC numbers a non-random changer's pockets itself: P0 is kept
+                    # as written, as it is for a random one)
+                    if strict and entry.pocketno < 0:
+                        raise ValueError(f"pocket {entry.pocketno} must be 0 or more")
                     if entry.pocketno == -1 and not strict:
                         idx = 0  # LinuxCNC stores a line without P in the spindle slot
                     else:

@@ -36,7 +36,7 @@ import numpy as np
 from motion.free import FreePlanner, JogLimitError, check_finite
 from motion.homing import Homing, HomingConfig, HomingError
 from motion.joint import Joint
-from motion.kinematics import Kinematics, KinematicsError
+from motion.kinematics import Kinematics, KinematicsError, KinematicsType
 from motion.pose import AXIS_LETTERS, NUM_AXES, EmcPose
 from motion.status import MotionStatusRuns
 from motion.teleop import Fit, JointLimiter, JointLimits, TeleopPlanner
@@ -335,7 +335,11 @@ class MotionController:
             return f"unknown trajectory mode {mode}"
         if self._is_moving():
             return "cannot change mode while moving"
-        if mode in (COORD, TELEOP) and not all(j.is_homed for j in self.joints):
+        if (
+            mode in (COORD, TELEOP)
+            and self.kins.kinematics_type() != KinematicsType.IDENTITY  # as LinuxCNC's motion
+            and not all(j.is_homed for j in self.joints)
+        ):
             return "all joints must be homed before going into coordinated mode"
         if mode == TELEOP:
             self._reset_teleop()

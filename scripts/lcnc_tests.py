@@ -14,11 +14,13 @@ through a folder of wrappers put first on ``PATH`` and a module folder on ``PYTH
     halsampler -> cnc hal sample halstreamer -> cnc hal stream
     rs274 -> cnc rs274           linuxcncrsh -> cnc rsh      realtime -> cnc hal realtime
     python3 -> this Python (its ``import hal`` is ours)   import linuxcnc -> import cnc
+    import gcode -> task.interp.python.gcode (LinuxCNC's preview interpreter module)
 
 Tests outside the project's scope (halcompile and C builds, Mesa hm2 hardware, Modbus
 hardware, classicladder, Tk/GTK/Qt GUIs, LinuxCNC's uspace internals) are listed as
 ``OUT`` with the reason and not run; ``--all`` runs them too. Prints one line per test and
-a summary; always exits 0 (CI does not run this: it needs the LinuxCNC mirror).
+a summary; always exits 0 (CI does not run this: it needs the LinuxCNC mirror). Like
+LinuxCNC's own run, the tests need ``nc`` (Debian: ``netcat-openbsd``) and ``bash``.
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -39,12 +42,14 @@ REPO = Path(__file__).resolve().parents[1]
 MIRROR = Path("/work/.mirror/LinuxCNC+linuxcnc/repo")
 BRANCH = "2.9"
 OVERRUN_RETRIES = 10
+UTIL_MODULE = "lib/python/linuxcnc_util.py"
 
 # test folder (or a prefix of it) -> why it is not this project's to pass
 OUT_OF_SCOPE = {
     "build/": "C/C++ build against LinuxCNC's headers",
     "halcompile/": "halcompile (C components)",
     "hm2-idrom": "Mesa hm2 hardware",
+    "interp/compile": "C++ build against LinuxCNC's librs274 and Python headers",
     "lowlevel/mutex": "C build against LinuxCNC's rtapi headers",
     "mb2hal/": "mb2hal: Modbus hardware driver",
     "module-loading/rtapi-app-main-fails": "halcompile (C component)",
@@ -83,18 +88,29 @@ class Outcome:
 
 
 def extract(checkout: Path, mirror: Path, branch: str) -> None:
-    """``tests/`` and ``scripts/runtests.in`` of ``branch`` from the mirror."""
+    """``tests/``, ``scripts/runtests.in`` and the test helper module ``linuxcnc_util``
+    (LinuxCNC's pure-Python layer over the ``linuxcnc`` module, which tests import) of
+    ``branch`` from the mirror."""
     checkout.mkdir(parents=True, exist_ok=True)
     archive = subprocess.run(
-        ["git", f"--git-dir={mirror}", "archive", branch, "tests", "scripts/runtests.in"],
+        [
+            "git",
+            f"--git-dir={mirror}",
+            "archive",
+            branch,
+            "tests",
+            "scripts/runtests.in",
+            UTIL_MODULE,
+        ],
         capture_output=True,
         check=True,
     )
     subprocess.run(["tar", "-x", "-C", str(checkout)], input=archive.stdout, check=True)
 
 
-def make_shims(folder: Path) -> tuple[Path, Path]:
-    """Wrapper commands and the ``linuxcnc`` module alias; returns (bin, python path)."""
+def make_shims(folder: Path, checkout: Path) -> tuple[Path, Path]:
+    """Wrapper commands, the ``linuxcnc`` module alias and LinuxCNC's own ``linuxcnc_util``
+    (it imports ``linuxcnc``, so it runs on ours); returns (bin, python path)."""
     bin_dir, py_dir = folder / "bin", folder / "python"
     bin_dir.mkdir(parents=True, exist_ok=True)
     py_dir.mkdir(parents=True, exist_ok=True)
@@ -107,6 +123,12 @@ def make_shims(folder: Path) -> tuple[Path, Path]:
         '"""LinuxCNC\'s Python module name, mapped to ours."""\n'
         "import sys\n\nimport cnc\n\nsys.modules[__name__] = cnc\n"
     )
+    (py_dir / "gcode.py").write_text(
+        '"""LinuxCNC\'s preview interpreter module, mapped to ours."""\n'
+        "import sys\n\nfrom task.interp.python import gcode\n\nsys.modules[__name__] = gcode\n"
+    )
+    if (checkout / UTIL_MODULE).is_file():
+        shutil.copy(checkout / UTIL_MODULE, py_dir)
     return bin_dir, py_dir
 
 
@@ -147,7 +169,26 @@ def scope_reason(name: str) -> str:
     return ""
 
 
+# linuxcncrsh's TCP port is fixed (5007): the tests that use it run one at a time
+RSH_PORT_LOCK = threading.Lock()
+
+
+def uses_rsh_port(folder: Path) -> bool:
+    return any(
+        b"linuxcncrsh" in path.read_bytes()
+        for path in folder.iterdir()
+        if path.is_file() and path.suffix in ("", ".sh", ".ini", ".py")
+    )
+
+
 def run_one(script: Path, tests_root: Path, env: dict[str, str], timeout: float) -> Outcome:
+    if uses_rsh_port(script.parent):
+        with RSH_PORT_LOCK:
+            return run_one_alone(script, tests_root, env, timeout)
+    return run_one_alone(script, tests_root, env, timeout)
+
+
+def run_one_alone(script: Path, tests_root: Path, env: dict[str, str], timeout: float) -> Outcome:
     folder = script.parent
     name = str(folder.relative_to(tests_root))
     started = time.monotonic()
@@ -244,6 +285,9 @@ def cleanup(env: dict[str, str]) -> None:
     subprocess.run(
         [sys.executable, "-m", "cnc", "halrun", "-U"], env=env, capture_output=True, timeout=60
     )
+    # the NML buffers and semaphores of a machine killed at the timeout
+    for leftover in Path("/dev/shm").glob(f"*.{env['CNC_INSTANCE']}.*"):
+        leftover.unlink(missing_ok=True)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -261,9 +305,9 @@ def main(argv: list[str] | None = None) -> int:
     scratch = Path(tempfile.mkdtemp(prefix="lcnc-tests-"))
     checkout = opts.checkout or scratch / "linuxcnc"
     try:
-        if not (checkout / "tests").is_dir():
+        if not (checkout / UTIL_MODULE).is_file():
             extract(checkout, opts.mirror, opts.branch)
-        bin_dir, py_dir = make_shims(scratch / "shims")
+        bin_dir, py_dir = make_shims(scratch / "shims", checkout)
         env = dict(os.environ)
         env.pop("DISPLAY", None)
         env.update(

@@ -131,6 +131,7 @@ class Task:
         self.setup: MachineSetup = load_setup(ini)
         self.nml = nml
         self.stat = emc.EMC_STAT()
+        self.stat.status = RCS_STATUS.DONE  # idle with no command yet, as LinuxCNC's task
         canon_setup = CanonSetup(
             linear_units=self.setup.linear_units,
             axis_mask=self.setup.axis_mask,
@@ -991,19 +992,23 @@ class Task:
         was_mdi = self.run is Run.MDI
         self.run = Run.IDLE
         self.is_running_on_abort = False
+        if was_mdi and self.mdi_queue:
+            # the queued MDI commands run in turn; the last one received (the pending
+            # serial) is answered DONE when all have run, as LinuxCNC's wait_complete expects
+            serial, text = self.mdi_queue.popleft()
+            outcome = self._start_mdi_or_abort(text)
+            if outcome is True:
+                return
+            self.mdi_queue.clear()
+            self.pending_serial = 0
+            self.stat.echo_serial_number = serial
+            self.stat.status = RCS_STATUS.ERROR
+            self.operator_error(outcome)
+            return
         if self.pending_serial:
             self.stat.echo_serial_number = self.pending_serial
             self.stat.status = RCS_STATUS.DONE
             self.pending_serial = 0
-        if was_mdi and self.mdi_queue:
-            serial, text = self.mdi_queue.popleft()
-            self.stat.echo_serial_number = serial
-            outcome = self._start_mdi_or_abort(text)
-            if outcome is True:
-                self.pending_serial = serial
-            else:
-                self.stat.status = RCS_STATUS.ERROR
-                self.operator_error(outcome)
 
     def _check_motion_errors(self) -> None:
         """A command motion refused during a run stops the run (motion said why)."""

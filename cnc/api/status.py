@@ -280,15 +280,16 @@ class stat:  # LinuxCNC's name: linuxcnc.stat
         self._link.try_attach(EMC_STATUS)
 
     def poll(self) -> None:
-        """Take the latest status; ``cnc.error`` if the controller is not running."""
+        """Take the latest status; ``cnc.error`` if the controller is not running. While it
+        starts (its buffers made, task not publishing yet: a HAL file's ``loadusr`` program)
+        every attribute stays as it was, zero at first, as LinuxCNC's ``poll``."""
         try:
             buffer = self._link.buffer(EMC_STATUS)
             has_status = buffer.peek_into(self._status, self._status_bytes)
         except NmlError as exc:
             raise error(str(exc)) from None
-        if not has_status:  # buffers made, task not publishing yet: not up (like LinuxCNC)
-            raise error("the controller is starting: no status published yet")
-        self.__dict__.clear()  # attributes are computed again from the new status
+        if has_status:
+            self.__dict__.clear()  # attributes are computed again from the new status
 
     def __getattr__(self, name: str) -> Any:
         getter = ATTRIBUTES.get(name)

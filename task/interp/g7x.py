@@ -411,6 +411,9 @@ class _Swapped:
     def straight_rapid(self, end: complex) -> None:
         self.out.straight_rapid(self.map(end))
 
+    def uncompensated_rapid(self, end: complex) -> None:
+        self.out.uncompensated_rapid(self.map(end))
+
     def circular_move(self, ccw: int, center: complex, end: complex) -> None:
         self.out.circular_move(int(not ccw) if self.flip else ccw, self.map(center), self.map(end))
 
@@ -555,7 +558,8 @@ class G7xPath:
             distance = (passes - 1) * (d - e) / p + e
             one = self.copy()
             one.add_distance(distance)
-            swapped.straight_rapid(one.segments[0].start)
+            # the rapid to the start point runs without cutter compensation (2.9.10)
+            swapped.uncompensated_rapid(one.segments[0].start)
             swapped.straight_rapid(one.segments[0].end)
             for s in one.segments[1:-1]:
                 s.draw(swapped)
@@ -629,7 +633,9 @@ class G7xPath:
                             return
                         p += 1
                 return
-            if abs(loc[0].imag - x) > TOLERANCE:
+            if abs(loc[0].imag - x) > TOLERANCE or segs[p].end == loc[0]:
+                # beyond this segment (or at its end: LinuxCNC 2.9.10's fix of an
+                # endless loop), on to the next
                 p += 1
                 continue
             for ip in range(p, len(segs)):

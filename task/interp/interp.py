@@ -843,6 +843,7 @@ class Interpreter(
                     pars[5600] = canon.GET_EXTERNAL_TC_FAULT()
                     pars[5601] = canon.GET_EXTERNAL_TC_REASON()
                     pars[5420:5429] = self.current
+                    pars[5021:5030] = self.abs_position()
                     self.file_pos += 1
                     self.sequence_number += 1
                     self.linetext = text
@@ -854,6 +855,7 @@ class Interpreter(
         if command is None and self.file_lines is None:
             return INTERP_FILE_NOT_OPEN
         self.parameters[5420:5429] = self.current
+        self.parameters[5021:5030] = self.abs_position()
         offset = self.file_pos
         try:
             status = self.read_text(command)
@@ -902,6 +904,7 @@ class Interpreter(
         pars[5600] = canon.GET_EXTERNAL_TC_FAULT()
         pars[5601] = canon.GET_EXTERNAL_TC_REASON()
         pars[5420:5429] = self.current
+        pars[5021:5030] = self.abs_position()
         offset = self.file_pos
         self.file_pos = offset + 1
         self.sequence_number += 1

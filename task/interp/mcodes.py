@@ -372,9 +372,7 @@ class MCodesMixin:
                 f"G{frame.saved_g_codes[5] // 10}", "M7x: restore_settings G20/G21 failed: ''"
             )
             current_g = self.active_g_codes()
-        cmd = _gen_settings(
-            current_g, frame.saved_g_codes, self.active_settings(), frame.saved_settings
-        )
+        cmd = _gen_settings(current_g, frame.saved_g_codes, frame.saved_settings)
         cmd += _gen_m_codes(self.active_m_codes(), frame.saved_m_codes)
         for part in cmd.split("\n"):
             if part:
@@ -393,18 +391,15 @@ class MCodesMixin:
             raise InterpError(message)
 
 
-def _gen_settings(current_g, saved_g, current_f, saved_f) -> str:
-    """The G-code text that brings the modal state back to a saved one (M72, M73)."""
-    cmd = []
-    g64_changed = False
-    for i in range(5):
-        if saved_f[i] != current_f[i]:
-            if i == 1:
-                cmd.append(f" F{saved_f[i]:.1f}")
-            elif i == 2:
-                cmd.append(f" S{saved_f[i]:.0f}")
-            elif i in (3, 4):
-                g64_changed = True
+def _gen_settings(current_g, saved_g, saved_f) -> str:
+    """The G-code text that brings the modal state back to a saved one (M72, M73).
+
+    Feed, speed and the G64 tolerances are restored whether or not they changed, as
+    LinuxCNC 2.9.10 does (its fix of issue 1987; the 2.9.0 pre-release compared them with
+    the current values and so lost a feed or speed the canon layer had not applied yet).
+    """
+    cmd = [f" F{saved_f[1]:.1f}", f" S{saved_f[2]:.0f}"]
+    g64_changed = True
     for i in range(17):
         val = saved_g[i]
         if val == current_g[i]:

@@ -363,7 +363,13 @@ class MotionMixin:
         }
         words["d"] = (block.d_flag, block.d_number_float)
         words["p"] = (block.p_flag, block.p_number)
-        self.convert_straight(G_0, block)
+        start_x, start_z = self.current[0], self.current[2]
+        side = self.cutter_comp_side
+        self.cutter_comp_side = 0  # the move to the cycle's start point is uncompensated
+        try:
+            self.convert_straight(G_0, block)
+        finally:
+            self.cutter_comp_side = side
         path = G7xPath(lambda text: self.canon.PRINT_LINE(text.rstrip("\n")))
         start = complex(z, x)
         exit_level = self.call_level
@@ -441,15 +447,26 @@ class MotionMixin:
         r = words["r"][1] if words["r"][0] else 0.5
         u = words["u"][1] if words["u"][0] else 0.0
         w = words["w"][1] if words["w"][0] else 0.0
+        # LinuxCNC 2.9.10: the cycle starts from where the G7x block left the tool, not from
+        # the end of the profile the subroutine drew
+        self.current[0], self.current[2] = start_x, start_z
         if i <= 0:
             raise InterpError("G7X error: I must be greater than zero.")
+        first, last = path.segments[0], path.segments[-1]
+        d_front, d_back = first.end - first.start, last.end - last.start
         motion = _G7xMachine(self, self.block)
         try:
             if cycle == 70:
                 path.do_g70(motion, x, z, d, e, p)
             elif cycle == 71:
+                # 2.9.10: a profile ending away from the start X gets its closing X move
+                # (the missing last pass)
+                if abs(d_back.real) > 0 and d_front.imag * (x - start.imag) < 0:
+                    path.segments.append(Straight(start, complex(start.real, x)))
                 path.do_g71(motion, subcycle, x, z, u, w, d, i, r)
             else:
+                if abs(d_back.imag) > 0 and d_front.real * (z - start.real) < 0:
+                    path.segments.append(Straight(start, complex(z, start.imag)))
                 path.do_g72(motion, subcycle, x, z, u, w, d, i, r)
         except G7xError as error:
             raise_g7x(error)
@@ -979,6 +996,15 @@ class _G7xMachine:
     def straight_rapid(self, end: complex) -> None:
         self._to(end)
         self.interp.convert_straight(G_0, self.block)
+
+    def uncompensated_rapid(self, end: complex) -> None:
+        """A rapid with cutter compensation suspended (G70's move to its start point)."""
+        side = self.interp.cutter_comp_side
+        self.interp.cutter_comp_side = 0
+        try:
+            self.straight_rapid(end)
+        finally:
+            self.interp.cutter_comp_side = side
 
     def circular_move(self, ccw: int, center: complex, end: complex) -> None:
         self._to(end)

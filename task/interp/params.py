@@ -11,11 +11,11 @@ predefined ``#<_...>`` ones are read-only and computed from the interpreter stat
 
 from __future__ import annotations
 
-import math
 import os
 
 from task.varfile import MAX_PARAMETERS, VarFileError, read_var_file, write_var_file
 
+from .common import rotate
 from .errors import InterpError
 
 REQUIRED = (
@@ -83,6 +83,9 @@ _PREDEFINED = [
     "_abs_a",
     "_abs_b",
     "_abs_c",
+    "_abs_u",
+    "_abs_v",
+    "_abs_w",
     "_value",
     "_value_returned",
     "_task",
@@ -93,6 +96,23 @@ _PREDEFINED = [
 
 class ParamsMixin:
     """Parameter storage; mixed into the Interpreter."""
+
+    def abs_position(self) -> list[float]:
+        """The controlled point in machine coordinates (no G5x, G92/G52, rotation or tool
+        offset), in program units: #5021-#5029 and #<_abs_x>..#<_abs_w> (LinuxCNC 2.9.10)."""
+        cur, axis, origin, tool = (
+            self.current,
+            self.axis_offset,
+            self.origin_offset,
+            self.tool_offset,
+        )
+        # (read on every line: one pass over the axes; X and Y again only under rotation)
+        position = [c + a + o + t for c, a, o, t in zip(cur, axis, origin, tool, strict=True)]
+        if self.rotation_xy:
+            x, y = rotate(cur[0] + axis[0], cur[1] + axis[1], self.rotation_xy)
+            position[0] = x + origin[0] + tool[0]
+            position[1] = y + origin[1] + tool[1]
+        return position
 
     # ------------------------------------------------------------- var files
     def restore_parameters(self, filename: str) -> None:
@@ -306,19 +326,12 @@ class ParamsMixin:
         axes = {"_x": 0, "_y": 1, "_z": 2, "_a": 3, "_b": 4, "_c": 5, "_u": 6, "_v": 7, "_w": 8}
         if name in axes:
             return cur[axes[name]]
-        if name in ("_abs_x", "_abs_y"):
-            x = cur[0] + s.axis_offset[0]
-            y = cur[1] + s.axis_offset[1]
-            t = s.rotation_xy * (math.pi / 180.0)
-            rx = x * math.cos(t) - y * math.sin(t)
-            ry = x * math.sin(t) + y * math.cos(t)
-            if name == "_abs_x":
-                return rx + s.origin_offset[0] + s.tool_offset[0]
-            return ry + s.origin_offset[1] + s.tool_offset[1]
-        abs_axes = {"_abs_z": 2, "_abs_a": 3, "_abs_b": 4, "_abs_c": 5}
+        abs_axes = {
+            "_abs_x": 0, "_abs_y": 1, "_abs_z": 2, "_abs_a": 3, "_abs_b": 4,
+            "_abs_c": 5, "_abs_u": 6, "_abs_v": 7, "_abs_w": 8,
+        }  # fmt: skip
         if name in abs_axes:
-            k = abs_axes[name]
-            return cur[k] + s.axis_offset[k] + s.origin_offset[k] + s.tool_offset[k]
+            return self.abs_position()[abs_axes[name]]
         if name == "_value":
             return s.return_value
         if name == "_value_returned":

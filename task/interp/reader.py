@@ -43,7 +43,7 @@ RS274NGC_MAX_PARAMETERS = 5602
 INTERP_SUB_PARAMS = 30
 LINELEN = 255
 TOLERANCE_EQUAL = 0.0001
-READONLY_PARAMETERS = frozenset(list(range(5400, 5414)) + list(range(5420, 5429)))
+READONLY_PARAMETERS = frozenset([*range(5021, 5030), *range(5400, 5414), *range(5420, 5429)])
 
 # binary operations, LinuxCNC's numbering
 (

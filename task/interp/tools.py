@@ -121,6 +121,14 @@ class ToolsMixin:
         for k in range(2, 9):
             cur[k] += old[k] - offset[k]
         self.tool_offset = offset
+        # #5081-#5089: the offset now applied, in user units (LinuxCNC 2.9.10; #5401-#5409
+        # stay the loaded tool's stored offset)
+        p2u = self.p2u_len
+        self.parameters[5081:5090] = [
+            *(p2u(v) for v in offset[:3]),
+            *offset[3:6],
+            *(p2u(v) for v in offset[6:]),
+        ]
 
     def convert_setup_tool(self, block: Block) -> None:
         """G10 L1 / L10 / L11: change a tool table entry."""

@@ -63,7 +63,7 @@ def test_random_changer_indexes_by_pocket(tmp_path) -> None:
         ("T1 P1 Z0.5\nT2 P2 K3\n", "2: unknown word 'K3'"),
         ("T1 P1 Zabc\n", "1: bad number in word 'Zabc'"),
         ("T0 P1\n", "1: tool number 0 must be positive"),
-        ("T1 P0\n", "1: pocket 0 must be positive"),
+        ("T1 P-1\n", "1: pocket -1 must be 0 or more"),
         ("P3 Z1\n", "1: T word missing"),
     ],
 )
@@ -73,6 +73,15 @@ def test_errors_name_file_and_line(tmp_path, text: str, cause: str) -> None:
     with pytest.raises(ToolTableError) as info:
         ToolTable().load(path)
     assert str(info.value) == f"{path}:{cause}"
+
+
+def test_pocket_0_in_a_non_random_table_is_kept_as_written(tmp_path) -> None:
+    path = tmp_path / "tool.tbl"
+    path.write_text("T2 P0 D1.5\nT1 P1\n")  # LinuxCNC's tests/io-startup/nonrandom/tool-in-P0
+    table = ToolTable()
+    table.load(path)
+    assert (table.get(1).toolno, table.get(1).pocketno) == (2, 0)
+    assert table.get(2).toolno == 1
 
 
 def test_lenient_load_skips_bad_lines_like_linuxcnc(tmp_path) -> None:

@@ -90,11 +90,16 @@ def test_continuous_jog_stops_at_the_soft_limit_once_homed() -> None:
     assert refused == "joint 1: at or beyond the positive soft limit 100: cannot jog further"
 
 
-def test_coordinated_mode_needs_all_joints_homed() -> None:
-    motion = make()
+def test_coordinated_mode_needs_all_joints_homed_unless_kinematics_are_identity() -> None:
+    motion = MotionController(
+        load_kinematics("trivkins", coordinates="XYZ", kinstype="both"), 3, PERIOD
+    )
     motion.handle(emc.EMC_TRAJ_ENABLE())
     refused = motion.handle(emc.EMC_TRAJ_SET_MODE(mode=COORD))
     assert refused == "all joints must be homed before going into coordinated mode"
+    identity = make()  # LinuxCNC's motion lets identity kinematics coordinate unhomed
+    identity.handle(emc.EMC_TRAJ_ENABLE())
+    assert identity.handle(emc.EMC_TRAJ_SET_MODE(mode=COORD)) is None
 
 
 def test_homing_without_switches_sets_home_offset_then_moves_home() -> None:
