@@ -128,6 +128,10 @@ class Task:
         self.setup: MachineSetup = load_setup(ini)
         self.nml = nml
         self.stat = emc.EMC_STAT()
+        # [EMCIO]EMCIO set but empty: the launcher starts no iocontrol (as LinuxCNC's, whose
+        # orphans/axis_noio.ini runs so; without the key LinuxCNC starts its io): E-stop is motion's and the safety board's alone,
+        # and tool, coolant and lube commands are refused (see _send_io)
+        self.has_iocontrol = (ini.find("EMCIO", "EMCIO") or "io").strip() != ""
         canon_setup = CanonSetup(
             linear_units=self.setup.linear_units,
             axis_mask=self.setup.axis_mask,
@@ -1030,6 +1034,10 @@ class Task:
         return self._await(MOTION_STATUS, "motion", self.last_motion_serial) if is_waiting else None
 
     def _send_io(self, msg: emc.NMLmsg, is_waiting: bool = False) -> str | None:
+        if not self.has_iocontrol:
+            if isinstance(msg, _IO_OPTIONAL):
+                return None  # nothing to tell an iocontrol that is not there
+            return f"cannot {msg.NAME}: this machine has no iocontrol ([EMCIO]EMCIO is empty)"
         try:
             self.last_io_serial = self.nml[TOOL_COMMAND].write(msg)
         except NmlError as exc:
@@ -1235,3 +1243,12 @@ def _writable_dirs(ini: IniFile, setup: MachineSetup) -> list[str]:
 def _store(pose: emc.EmcPose, values: Sequence[float]) -> None:
     pose.tran.x, pose.tran.y, pose.tran.z = values[0], values[1], values[2]
     pose.a, pose.b, pose.c, pose.u, pose.v, pose.w = values[3:9]
+
+
+# What task tells iocontrol about E-stop and aborts: nothing to do without one.
+_IO_OPTIONAL = (
+    emc.EMC_AUX_ESTOP_ON,
+    emc.EMC_AUX_ESTOP_OFF,
+    emc.EMC_AUX_ESTOP_RESET,
+    emc.EMC_TOOL_ABORT,
+)
