@@ -391,7 +391,10 @@ class MotionController:
             if self.mode != FREE:
                 return "jogging a joint needs free (joint) mode"
             joint = self._joint(index)
-            problem = self.extra_joints.check_jog(index) or self.indexers.check_jog(index, None)
+            is_locking = self.homing_configs[index].locking_indexer
+            problem = self.extra_joints.check_jog(index) or self.indexers.check_jog(
+                index, None, is_locking
+            )
             if problem and not isinstance(cmd, emc.EMC_JOG_STOP):
                 return problem  # (hook)
             planner, name = joint.planner, f"joint {index}"

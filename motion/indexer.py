@@ -28,7 +28,6 @@ class LockingIndexers:
         # the joints with unlock pins (motmod unlock_joints_mask)
         self.has_pins = [bool(unlock_joints_mask >> j & 1) for j in range(len(joints))]
         self.axis_joint: dict[int, int] = {}  # axis index -> its locking joint
-        self.locking_joints: set[int] = set()  # [JOINT_N]LOCKING_INDEXER (homing params)
         self._active: tuple[object, int] | None = None  # (indexing move, joint)
         self._relocking: int | None = None  # joint whose lock we wait for
 
@@ -63,9 +62,12 @@ class LockingIndexers:
             )
         return None
 
-    def check_jog(self, joint: int | None, axis: int | None) -> str | None:
-        """LinuxCNC: a locking indexer is moved by G0 or homing only."""
-        if joint is not None and joint in self.locking_joints:
+    def check_jog(
+        self, joint: int | None, axis: int | None, is_locking_joint: bool = False
+    ) -> str | None:
+        """LinuxCNC: a locking indexer ([JOINT_N]LOCKING_INDEXER, ``is_locking_joint``) and
+        its axis are moved by G0 or homing only."""
+        if joint is not None and is_locking_joint:
             return f"cannot jog locking indexer joint {joint}"
         if axis is not None and axis in self.axis_joint:
             letter = "XYZABCUVW"[axis]
