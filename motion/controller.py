@@ -523,7 +523,7 @@ class MotionController:
         vector.pos = end.copy()
         pose = EmcPose(*end.tolist())
         self._set_joints_from_pose(self.eoffsets.add(pose, dt))  # (hook: external offsets)
-        if self.eoffsets.axes:
+        if self.eoffsets.planners:
             self.joint_limiter.advance(self.kins.inverse(pose))
         else:
             self.joint_limiter.advance([j.pos_cmd for j in self.kins_joints])
@@ -996,7 +996,7 @@ class MotionController:
         self._read_spindles(inputs.spindles)
         self._jog_wheels(inputs)
         # (hook) external offsets: the pins' requests (motion/eoffsets.py)
-        if self.eoffsets.axes:
+        if self.eoffsets.planners:
             can_offset = self.is_enabled and all(j.is_homed for j in self.joints)
             self.eoffsets.plan(inputs.eoffsets, can_offset)
         if self.mode == COORD:
@@ -1008,7 +1008,9 @@ class MotionController:
             error = self.tp.take_error()
             if error:
                 self.errors.append(error)
-            pose = self.eoffsets.add(EmcPose(*position.tolist()), dt)  # (hook)
+            pose = EmcPose(*position.tolist())
+            if self.eoffsets.planners:  # (hook) external offsets on top
+                pose = self.eoffsets.add(pose, dt)
             self._set_joints_from_pose(pose)
         elif self.mode == TELEOP:
             self._teleop_step(dt)
