@@ -128,10 +128,12 @@ class Task:
         self.setup: MachineSetup = load_setup(ini)
         self.nml = nml
         self.stat = emc.EMC_STAT()
-        # [EMCIO]EMCIO set but empty: the launcher starts no iocontrol (as LinuxCNC's, whose
-        # orphans/axis_noio.ini runs so; without the key LinuxCNC starts its io): E-stop is motion's and the safety board's alone,
-        # and tool, coolant and lube commands are refused (see _send_io)
-        self.has_iocontrol = (ini.find("EMCIO", "EMCIO") or "io").strip() != ""
+        # [EMCIO]EMCIO set but empty: the launcher starts no iocontrol, as LinuxCNC's
+        # (orphans/axis_noio.ini; without the key LinuxCNC starts its io). E-stop is then
+        # motion's and the safety board's alone; tool, coolant and lube commands are
+        # refused (see _send_io)
+        emcio = ini.find("EMCIO", "EMCIO")
+        self.has_iocontrol = emcio is None or emcio.strip() != ""
         canon_setup = CanonSetup(
             linear_units=self.setup.linear_units,
             axis_mask=self.setup.axis_mask,
