@@ -759,9 +759,10 @@ def _parse(section: str, key: Key, entry: IniValue, errors: list[IniError]) -> A
 
 # --------------------------------------------------------------------------- checks across keys
 def _check_joints(config: MachineConfig, errors: list[IniError]) -> None:
-    """[KINS]JOINTS = n needs [JOINT_0] .. [JOINT_n-1]: LinuxCNC silently runs a joint
-    without its section on defaults (1 unit/s, no limits, not homed by home-all). Only a
-    trivkins joint whose axis COORDINATES does not name (a lathe's Y) may go without one."""
+    """[KINS]JOINTS = n wants [JOINT_0] .. [JOINT_n-1]. LinuxCNC silently runs a joint
+    without its section on defaults (1 unit/s, no soft limits, not homed by home-all): so
+    do we, with a warning saying so (none for a trivkins joint whose axis COORDINATES does
+    not name, a lathe's Y: it is not used)."""
     ini = config.ini
     count = config.joints
     where = ini.entry("KINS", "JOINTS")
@@ -779,11 +780,10 @@ def _check_joints(config: MachineConfig, errors: list[IniError]) -> None:
             continue
         missing.append(f"[JOINT_{n}]")
     if missing:
-        errors.append(
-            where.error(
-                f"[KINS]JOINTS = {count} but {', '.join(missing)} "
-                f"{'is' if len(missing) == 1 else 'are'} missing"
-            )
+        config.warnings.append(
+            f"{where.where}: [KINS]JOINTS = {count} but {', '.join(missing)} "
+            f"{'is' if len(missing) == 1 else 'are'} missing: LinuxCNC's defaults are used "
+            "(MAX_VELOCITY 1, MAX_ACCELERATION 1, no soft limits, HOME 0, no HOME_SEQUENCE)"
         )
     for n in range(count, MAX_JOINTS):
         header = ini.header(f"JOINT_{n}")
@@ -954,19 +954,24 @@ def check_machine(path: str | os.PathLike[str]) -> MachineConfig:
 
 def check_tool_table(config: MachineConfig) -> list[IniError]:
     """The tool table ([EMCIO]TOOL_TABLE) read as iocontrol reads it; a problem is
-    ``file:line: cause``. A missing file is none (iocontrol starts with no tools, as
-    LinuxCNC's); nor is a table when [EMCIO]DB_PROGRAM supplies the tools."""
+    ``file:line: cause``; lines LinuxCNC skips or accepts oddly are warnings. A missing
+    file is none (iocontrol starts with no tools, as LinuxCNC's); nor is a table when
+    [EMCIO]DB_PROGRAM supplies the tools."""
     from iocontrol.tooltable import ToolTable, ToolTableError
 
     table = config.file("EMCIO", "TOOL_TABLE")
     if table is None or not table.exists() or config.value("EMCIO", "DB_PROGRAM"):
         return []
+    tools = ToolTable(config.value("EMCIO", "RANDOM_TOOLCHANGER"))
     try:
-        ToolTable(config.value("EMCIO", "RANDOM_TOOLCHANGER")).load(table)
+        tools.load(table)
     except ToolTableError as exc:
         return [IniError(exc.file, exc.line, exc.cause)]
     except OSError as exc:
         return [IniError(str(table), 0, f"cannot read the tool table: {exc.strerror}")]
+    config.warnings += [str(warning) for warning in tools.warnings]  # LinuxCNC reads those
+    if tools.has_unreadable_lines:
+        config.warnings.append(f"{table}: the tool table will not be saved over (lines skipped)")
     return []
 
 
@@ -983,3 +988,14 @@ def check_parameter_file(config: MachineConfig) -> list[IniError]:
     except VarFileError as exc:
         return [IniError(exc.file, exc.line, exc.cause)]
     return []
+
+
+def io_program(ini: IniFile) -> str:
+    """The I/O program the launcher starts, as LinuxCNC's: ``[IO]IO``, else
+    ``[EMCIO]EMCIO``, else ``io``; a key present but empty means none ("": the machine runs
+    without iocontrol, e.g. LinuxCNC's orphans/axis_noio.ini)."""
+    for section, key in (("IO", "IO"), ("EMCIO", "EMCIO")):
+        entry = ini.entry(section, key)
+        if entry is not None:
+            return entry.value.strip()
+    return "io"

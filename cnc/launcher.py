@@ -30,7 +30,7 @@ from pathlib import Path
 
 from cnc.atomicfile import atomic_write_text
 from cnc.ini import IniError, IniFile
-from cnc.inischema import check_machine
+from cnc.inischema import check_machine, io_program
 from cnc.runtime import (
     claim_instance,
     read_runtime_info,
@@ -132,7 +132,7 @@ class Launcher:
             if value:
                 os.environ[env] = value
         self._start_host()
-        if self.ini.find("EMCIO", "EMCIO"):
+        if io_program(self.ini):  # (our iocontrol whatever program the INI names)
             say("starting iocontrol")
             self._halcmd(
                 "loadusr",

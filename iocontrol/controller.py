@@ -222,7 +222,9 @@ class IoControl:
 
     def _startup_table(self) -> ToolTable:
         try:
-            return load_tool_table(self.table_path, self.config.is_random_toolchanger)
+            table = load_tool_table(self.table_path, self.config.is_random_toolchanger)
+            self.is_save_blocked = table.has_unreadable_lines  # (the launcher warned)
+            return table
         except ToolTableError as exc:
             self.is_save_blocked = True
             self._startup_errors.append(
@@ -500,11 +502,17 @@ class IoControl:
             raise CommandError(f"{exc}; tool table not reloaded") from None
         except OSError as exc:
             raise CommandError(f"cannot read tool table {path}: {exc.strerror}") from None
+        if table.has_unreadable_lines:  # the table in use stays rather than lose tools
+            self.is_save_blocked = self.is_save_blocked or path == self.table_path
+            skipped = "; ".join(str(w) for w in table.warnings if "skipped" in str(w))
+            raise CommandError(f"{skipped}; tool table not reloaded")
         self.changer.replace_table(table)
         # like LinuxCNC, a reload is not written back; the next change saves the table
         self._saved_text = table.format()
         if path == self.table_path:
             self.is_save_blocked = False
+        for warning in table.warnings:
+            self.report_error(f"warning: {warning}")
 
     def _set_offset(self, msg: emc.EMC_TOOL_SET_OFFSET) -> None:
         self.changer.set_offset(
@@ -534,7 +542,8 @@ class IoControl:
         self._saved_text = text
         if self.is_save_blocked:
             self.report_error(
-                f"tool table not saved: {self.table_path} has errors; fix it and reload it"
+                f"tool table not saved: {self.table_path} has lines that could not be read "
+                "(saving would lose them); fix the file and reload it"
             )
             return False
         try:

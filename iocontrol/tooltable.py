@@ -10,16 +10,23 @@ The table keeps LinuxCNC's *tooldata index* model (TOOL-011/012): index 0 is the
 nonrandom changer, tools are stored at indices 1, 2, ... in load order and the file pocket
 numbers are kept only for saving; with a random changer, the pocket number is the index.
 
-``load`` checks every line: with ``strict=True`` (the default) the first bad line raises
-``ToolTableError`` (``str()`` is ``file:line: cause``); with ``strict=False`` bad lines are
-skipped and returned, which is what LinuxCNC's ``tooldata_load`` does. ``save`` writes the file
-atomically through ``cnc.atomicfile``. Nothing here knows about the interpreter.
+``load`` checks every line. With ``strict=True`` (the default) a line LinuxCNC would
+misread (a number with trailing garbage such as ``Z1,5``, ``nan``, a missing T or P word)
+raises ``ToolTableError`` (``str()`` is ``file:line: cause``); a line LinuxCNC skips as
+unreadable (an old-format header, a word without a number) is skipped too, and said in
+``warnings`` (``ToolTableError``s) with ``has_unreadable_lines`` set: such a table must
+never be saved over its file, which would lose those lines. What LinuxCNC accepts although
+it is odd (pocket 0 or a tool number below 1 in a nonrandom table) is loaded, with a
+warning. With ``strict=False`` every bad line is skipped and returned, which is what
+LinuxCNC's ``tooldata_load`` does. ``save`` writes the file atomically through
+``cnc.atomicfile``. Nothing here knows about the interpreter.
 """
 
 from __future__ import annotations
 
 import math
 import os
+import re
 
 from cnc.atomicfile import atomic_write_text
 
@@ -193,6 +200,30 @@ def _check_finite(entry: ToolEntry) -> None:
             raise ValueError(f"{letter} = {value} is not a finite number")
 
 
+_SCANF_INT = re.compile(r"[ \t]*[+-]?\d")
+_SCANF_FLOAT = re.compile(r"[ \t]*[+-]?(\d|\.\d|inf|nan)", re.IGNORECASE)
+
+
+def _is_readable_by_linuxcnc(line: str) -> bool:
+    """Whether LinuxCNC's ``sscanf`` reading takes every word of the line (maybe misreading
+    a value: ``Z1,5`` as Z1, ``Zinf``), rather than skipping the line as invalid."""
+    body = line.partition(";")[0]
+    for token in body.split(" "):
+        token = token.strip("\r\n\t")
+        if not token:
+            continue
+        letter, value = token[0].upper(), token[1:]
+        if letter in "TPQ":
+            if not _SCANF_INT.match(value):
+                return False
+        elif letter in AXES or letter in "DIJ":
+            if not _SCANF_FLOAT.match(value):
+                return False
+        else:
+            return False
+    return True
+
+
 class ToolTable:
     """Tool records by tooldata index; index 0 is the spindle."""
 
@@ -200,6 +231,8 @@ class ToolTable:
         self.random_toolchanger = random_toolchanger
         self.entries: dict[int, ToolEntry] = {}
         self.last_index = 0
+        self.warnings: list[ToolTableError] = []  # of the last load (strict)
+        self.has_unreadable_lines = False  # the last load skipped lines: never save over it
 
     # ------------------------------------------------------------------ access
     def get(self, idx: int) -> ToolEntry:
@@ -248,26 +281,51 @@ class ToolTable:
         self, lines: list[str], name: str = "<tools>", *, strict: bool = True
     ) -> list[str]:
         self.clear()
+        self.warnings = []
+        self.has_unreadable_lines = False
         skipped: list[str] = []
         next_index = 1
         for lineno, line in enumerate(lines, 1):
             try:
                 entry = parse_line(line, exact=strict)
-                if entry is None:
+            except ValueError as exc:
+                if not strict:
+                    skipped.append(line)
                     continue
+                if _is_readable_by_linuxcnc(line):  # it would misread the line: refused
+                    raise ToolTableError(name, lineno, str(exc)) from None
+                self.warnings.append(
+                    ToolTableError(name, lineno, f"{exc}: line skipped, as LinuxCNC does")
+                )
+                self.has_unreadable_lines = True
+                continue
+            if entry is None:
+                continue
+            try:
                 if self.random_toolchanger:
                     idx = entry.pocketno
+                    if not 0 <= idx < CANON_POCKETS_MAX and strict:  # LinuxCNC skips it
+                        self.warnings.append(
+                            ToolTableError(
+                                name,
+                                lineno,
+                                f"pocket {idx} out of range 0..{CANON_POCKETS_MAX - 1}: "
+                                "line skipped, as LinuxCNC does",
+                            )
+                        )
+                        self.has_unreadable_lines = True
+                        continue
                     if not 0 <= idx < CANON_POCKETS_MAX:
                         raise ValueError(f"pocket {idx} out of range 0..{CANON_POCKETS_MAX - 1}")
                     if strict and entry.toolno < 0:
                         raise ValueError(f"tool number {entry.toolno} must be >= 0")
                 else:
                     if strict and entry.toolno <= 0:
-                        raise ValueError(f"tool number {entry.toolno} must be positive")
+                        self._warn(name, lineno, f"tool number {entry.toolno} is not positive")
                     # (LinuxCNC numbers a non-random changer's pockets itself: P0 is kept
-                    # as written, as it is for a random one)
-                    if strict and entry.pocketno < 0:
-                        raise ValueError(f"pocket {entry.pocketno} must be 0 or more")
+                    # as written, as it is for a random one, and said)
+                    if strict and entry.pocketno <= 0:
+                        self._warn(name, lineno, f"pocket {entry.pocketno} is not positive")
                     if entry.pocketno == -1 and not strict:
                         idx = 0  # LinuxCNC stores a line without P in the spindle slot
                     else:
@@ -286,6 +344,9 @@ class ToolTable:
                 if spindle is not None and spindle.toolno == entry.toolno:
                     self.put(0, entry)
         return skipped
+
+    def _warn(self, name: str, lineno: int, cause: str) -> None:
+        self.warnings.append(ToolTableError(name, lineno, f"{cause} (accepted, as LinuxCNC)"))
 
     def format(self) -> str:
         out = []

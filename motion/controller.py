@@ -33,8 +33,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from motion.eoffsets import EoffsetInputs, ExternalOffsets
+from motion.extrajoints import ExtraJoints
 from motion.free import FreePlanner, JogLimitError, check_finite
 from motion.homing import Homing, HomingConfig, HomingError
+from motion.indexer import LockingIndexers
 from motion.joint import Joint
 from motion.kinematics import Kinematics, KinematicsError, KinematicsType
 from motion.pose import AXIS_LETTERS, NUM_AXES, EmcPose
@@ -152,6 +155,8 @@ class Inputs:
     is_jog_stop: bool = False  # motion.jog-stop: stop jogs at the acceleration limit
     is_jog_stop_immediate: bool = False  # motion.jog-stop-immediate
     axis_wheels: dict[int, WheelInputs] = field(default_factory=dict)  # axis index -> wheel
+    eoffsets: dict[int, EoffsetInputs] = field(default_factory=dict)  # axis.L.eoffset-*
+    posthome_cmd: list[float] = field(default_factory=list)  # of the extra joints
 
 
 @dataclass
@@ -176,16 +181,26 @@ class MotionController:
         num_aio: int = 4,
         planner_factory: Callable[..., TrajectoryPlanner] = TrajectoryPlanner,
         homing_class: type[Homing] = Homing,
+        num_extrajoints: int = 0,
+        unlock_joints_mask: int = 0,
     ) -> None:
         if not 1 <= num_joints <= emc.EMCMOT_MAX_JOINTS:
             raise ValueError(f"num_joints must be 1..{emc.EMCMOT_MAX_JOINTS}, got {num_joints}")
-        if getattr(kinematics, "num_joints", num_joints) != num_joints:
+        if not 0 <= num_extrajoints < num_joints:
+            raise ValueError(f"num_extrajoints must be 0..{num_joints - 1}, got {num_extrajoints}")
+        num_kins_joints = num_joints - num_extrajoints
+        if getattr(kinematics, "num_joints", num_kins_joints) != num_kins_joints:
             raise ValueError(
-                f"kinematics maps {kinematics.num_joints} joints, motmod has {num_joints}"
+                f"kinematics maps {kinematics.num_joints} joints, motmod has {num_kins_joints}"
+                + (f" (and {num_extrajoints} extra joints)" if num_extrajoints else "")
             )
         self.kins = kinematics
         self.period_s = period_s
         self.joints = [Joint(DEFAULT_JOINT_VEL, DEFAULT_JOINT_ACC) for _ in range(num_joints)]
+        self.kins_joints = self.joints[:num_kins_joints]  # the joints kinematics maps
+        # --- hooks: extra joints, locking indexers, external offsets (their own modules)
+        self.extra_joints = ExtraJoints(self.joints, num_extrajoints)
+        self.indexers = LockingIndexers(self.joints, unlock_joints_mask)
         self.is_faulted = [False] * num_joints
         self.homing_class = homing_class  # ARCH-007/008: default or a user's homing module
         self.homing_configs = [HomingConfig() for _ in range(num_joints)]
@@ -199,6 +214,7 @@ class MotionController:
         self.axis_max_acc = [math.inf] * NUM_AXES
         self.axis_min_limit = [-math.inf] * NUM_AXES
         self.axis_max_limit = [math.inf] * NUM_AXES
+        self.eoffsets = ExternalOffsets(self.axis_min_limit, self.axis_max_limit)
         self.tp = planner_factory(self.axis_max_vel, self.axis_max_acc, cycle_time=period_s)
         # teleop: one planner per world axis, as LinuxCNC 2.9 jogs axes (MOT-016, MOT-046)
         self.axis_planners = [
@@ -276,12 +292,16 @@ class MotionController:
         self.is_faulted = [False] * len(self.joints)
         for joint in self.joints:
             joint.hold_position()
+        if self.eoffsets.reset():  # hook: offsets zero at machine on, the pose keeps them
+            self.tp.set_position(list(self.carte_pos_cmd))
+            self._reset_teleop()
         return None
 
     def _disable(self, _cmd: emc.NMLmsg | None = None) -> None:
         """Motion off: everything stops where it is, the queue is emptied (MOT-021)."""
         self.is_enabled = False
         self._stop_everything_now()
+        self.indexers.release_all()  # hook: no unlock request with motion off
         return None
 
     def estop(self) -> None:
@@ -343,8 +363,8 @@ class MotionController:
             return "all joints must be homed before going into coordinated mode"
         if mode == TELEOP:
             self._reset_teleop()
-        if mode == COORD:
-            self.tp.set_position(list(self.carte_pos_cmd))
+        if mode == COORD:  # (hook: the planner's pose is without external offsets)
+            self.tp.set_position(self.eoffsets.remove(self.carte_pos_cmd))
         else:
             for joint in self.joints:
                 joint.planner.reset(joint.pos_cmd)
@@ -375,6 +395,12 @@ class MotionController:
             if self.mode != FREE:
                 return "jogging a joint needs free (joint) mode"
             joint = self._joint(index)
+            is_locking = self.homing_configs[index].locking_indexer
+            problem = self.extra_joints.check_jog(index) or self.indexers.check_jog(
+                index, None, is_locking
+            )
+            if problem and not isinstance(cmd, emc.EMC_JOG_STOP):
+                return problem  # (hook)
             planner, name = joint.planner, f"joint {index}"
             override = self.is_override_limits or not joint.is_homed
         else:
@@ -382,6 +408,9 @@ class MotionController:
                 return "jogging an axis needs teleop mode (teleop_enable(1) once homed)"
             if not 0 <= index < NUM_AXES or not self._has_axis(index):
                 return f"axis {index} is not used by this machine"
+            problem = self.indexers.check_jog(None, index)
+            if problem and not isinstance(cmd, emc.EMC_JOG_STOP):
+                return problem  # (hook)
             planner, name = self.axis_planners[index], f"axis {AXIS_LETTERS[index].upper()}"
             override = self.is_override_limits
         try:
@@ -438,10 +467,14 @@ class MotionController:
 
     def _reset_teleop(self) -> None:
         """Teleop at rest where the pose is (entering teleop MOT-027, motion off)."""
-        for planner, value in zip(self.axis_planners, self.carte_pos_cmd, strict=True):
+        pose = self.eoffsets.remove(self.carte_pos_cmd)  # (hook: without external offsets)
+        for planner, value in zip(self.axis_planners, pose, strict=True):
             planner.reset(value)
-        self.teleop.reset(list(self.carte_pos_cmd))
-        self.joint_limiter.reset([j.pos_cmd for j in self.joints])
+        self.teleop.reset(pose)
+        joints = [j.pos_cmd for j in self.kins_joints]
+        if pose != list(self.carte_pos_cmd):  # (external offsets held: joints without them)
+            joints = self.kins.inverse(EmcPose(*pose))
+        self.joint_limiter.reset(joints)
 
     def _stop_teleop(self) -> None:
         """ABORT or jog-stop in teleop (MOT-021): the jogs' velocities join the vector's,
@@ -492,8 +525,12 @@ class MotionController:
             if not planner.is_enabled:
                 planner.target = value
         vector.pos = end.copy()
-        self._set_joints_from_pose(EmcPose(*end.tolist()))
-        self.joint_limiter.advance([j.pos_cmd for j in self.joints])
+        pose = EmcPose(*end.tolist())
+        self._set_joints_from_pose(self.eoffsets.add(pose, dt))  # (hook: external offsets)
+        if self.eoffsets.planners:
+            self.joint_limiter.advance(self.kins.inverse(pose))
+        else:
+            self.joint_limiter.advance([j.pos_cmd for j in self.kins_joints])
 
     def _follow_fit(
         self, fit: Fit, jog_v0: np.ndarray, jog_v1: np.ndarray, vector_v0: np.ndarray
@@ -559,16 +596,29 @@ class MotionController:
         problem = self._require_coord() or self._check_soft_limits(end, "Linear move")
         if problem:
             return problem
-        self._note_move_type(cmd.type == emc.EMC_MOTION_TYPE.TRAVERSE)
+        is_indexing = cmd.type == emc.EMC_MOTION_TYPE.INDEXROTARY  # (task named the joint)
+        is_rapid = is_indexing or cmd.type == emc.EMC_MOTION_TYPE.TRAVERSE
+        self._note_move_type(is_rapid)
+        # (hook) a move of a locking indexer's axis waits for its unlock (motion/indexer.py)
+        indexer = {}
+        if self.indexers.axis_joint or is_indexing:
+            requested = cmd.indexer_jnum if is_indexing else -1
+            joint = self.indexers.indexing_joint(self.tp.end_position, list(end), requested)
+            if joint >= 0:
+                problem = self.indexers.check_move(joint)
+                if problem:
+                    return problem
+                indexer = {"indexer_joint": joint}
         self.tp.add_line(
             list(end),
             cmd.vel,
             cmd.ini_maxvel,
             cmd.acc,
             motion_id=self.next_motion_id,
-            term=self.term_cond,
+            term=TermCond.STOP if indexer else self.term_cond,
             tolerance=self.tolerance,
-            is_rapid=cmd.type == emc.EMC_MOTION_TYPE.TRAVERSE,
+            is_rapid=is_rapid,
+            **indexer,
         )
         self._flush_synchronised_outputs()
         return None
@@ -672,10 +722,10 @@ class MotionController:
             self.axis_min_limit[axis] = cmd.limit
         elif isinstance(cmd, emc.EMC_AXIS_SET_MAX_POSITION_LIMIT):
             self.axis_max_limit[axis] = cmd.limit
-        elif isinstance(cmd, emc.EMC_AXIS_SET_MAX_VELOCITY):
-            self.axis_max_vel[axis] = cmd.vel
+        elif isinstance(cmd, emc.EMC_AXIS_SET_MAX_VELOCITY):  # (hook: external offsets' share)
+            self.axis_max_vel[axis] = self.eoffsets.planning_velocity(axis, cmd.vel)
         else:
-            self.axis_max_acc[axis] = cmd.acc
+            self.axis_max_acc[axis] = self.eoffsets.planning_acceleration(axis, cmd.acc)
         self._apply_traj_limits()
         self.teleop.set_limits(
             self.axis_max_vel, self.axis_max_acc, self.axis_min_limit, self.axis_max_limit
@@ -799,6 +849,9 @@ class MotionController:
     def _unhome(self, cmd: emc.EMC_JOINT_UNHOME) -> str | None:
         if self._is_moving():
             return "cannot unhome while moving"
+        problem = self.extra_joints.check_unhome(cmd.joint, self.is_enabled)  # (hook)
+        if problem:
+            return problem
         try:
             self.homing.unhome(cmd.joint)
         except HomingError as exc:
@@ -946,13 +999,23 @@ class MotionController:
         self._check_hard_limits_and_faults(inputs)
         self._read_spindles(inputs.spindles)
         self._jog_wheels(inputs)
+        # (hook) external offsets: the pins' requests (motion/eoffsets.py)
+        if self.eoffsets.planners:
+            can_offset = self.is_enabled and all(j.is_homed for j in self.joints)
+            self.eoffsets.plan(inputs.eoffsets, can_offset)
         if self.mode == COORD:
             self.tp.probe_input = inputs.probe
+            if self.indexers.axis_joint:  # (hook) indexing moves wait for the unlock
+                is_held = self.indexers.hold(self.tp.current_move)
+                self.tp.is_start_held = self.tp.is_start_held or is_held
             position = self.tp.step()
             error = self.tp.take_error()
             if error:
                 self.errors.append(error)
-            self._set_joints_from_pose(EmcPose(*position.tolist()))
+            pose = EmcPose(*position.tolist())
+            if self.eoffsets.planners:  # (hook) external offsets on top
+                pose = self.eoffsets.add(pose, dt)
+            self._set_joints_from_pose(pose)
         elif self.mode == TELEOP:
             self._teleop_step(dt)
         else:
@@ -962,6 +1025,9 @@ class MotionController:
                 self.errors.append(error)
             for joint in self.joints:
                 joint.pos_cmd = joint.planner.step(dt)
+        if self.extra_joints.count:  # (hook) homed extra joints follow posthome-cmd
+            self.extra_joints.posthome_cmd[:] = inputs.posthome_cmd
+            self.extra_joints.step(dt)
         for joint in self.joints:
             joint.update_command(dt)
         if self.mode == FREE:
@@ -1145,7 +1211,7 @@ class MotionController:
                     f"(joint.{index}.motor-pos-fb)"
                 )
                 return
-            if joint.is_following_error():
+            if joint.is_following_error() and not self.extra_joints.is_following(index):
                 self.fault(f"joint {index} following error")
                 return
 

@@ -30,6 +30,7 @@ from hal.core import HalError
 from motion.controller import (
     COORD,
     TELEOP,
+    EoffsetInputs,
     Inputs,
     MotionController,
     SpindleInputs,
@@ -75,9 +76,21 @@ class MotionPins(RtComponent):
     digital_in = pin("bit in", "digital-in-{:02d}", count="num_dio")
     analog_out = pin("float out", "analog-out-{:02d}", count="num_aio")
     analog_in = pin("float in", "analog-in-{:02d}", count="num_aio")
+    eoffset_active = pin("bit out")  # an external offset is applied (motion/eoffsets.py)
+    eoffset_limited = pin("bit out")  # ... and held at a soft limit
 
     def setup(self, num_dio: int = 4, num_aio: int = 4) -> None:
         pass
+
+
+class IniSettings:
+    """What motion reads of the machine's INI file itself: task sends it no message
+    for these (LinuxCNC's task does, in fields our messages do not have)."""
+
+    def __init__(self) -> None:
+        self.heartbeat_timeout = DEFAULT_HEARTBEAT_TIMEOUT_S
+        self.eoffset_ratios: dict[int, float] = {}  # [AXIS_L]OFFSET_AV_RATIO
+        self.locking_joints: dict[int, int] = {}  # [AXIS_L]LOCKING_INDEXER_JOINT
 
 
 class SwitchPins(RtComponent):
@@ -112,9 +125,29 @@ class JointPins(RtComponent):
     jog_accel_fraction = pin("float in", default=1.0)
 
 
+class UnlockPins(RtComponent):
+    """A locking indexer's pins (bit N of ``unlock_joints_mask``, motion/indexer.py)."""
+
+    unlock = pin("bit out")
+    is_unlocked = pin("bit in")
+
+
+class PosthomePins(RtComponent):
+    """An extra joint's command once homed (``num_extrajoints``, motion/extrajoints.py)."""
+
+    posthome_cmd = pin("float in")
+
+
 class AxisPins(RtComponent):
     pos_cmd = pin("float out")
     teleop_pos_cmd = pin("float out")
+    # external offsets (motion/eoffsets.py)
+    eoffset_enable = pin("bit in")
+    eoffset_clear = pin("bit in")
+    eoffset_counts = pin("s32 in")
+    eoffset_scale = pin("float in")
+    eoffset = pin("float out")
+    eoffset_request = pin("float out")
     # MPG wheel (teleop mode)
     jog_counts = pin("s32 in")
     jog_enable = pin("bit in")
@@ -154,7 +187,7 @@ class Motmod:
 
     def __init__(self, host: Any, comp: str, args: dict[str, str]) -> None:
         options = _options(args)
-        kins = _kinematics(host, options["num_joints"])
+        kins = _kinematics(host, options["num_joints"] - options["num_extrajoints"])
         period_s = options["servo_period_nsec"] / 1e9
         planner, homing = _modules(args)
         try:
@@ -167,14 +200,37 @@ class Motmod:
                 num_aio=options["num_aio"],
                 planner_factory=planner,
                 homing_class=homing,
+                num_extrajoints=options["num_extrajoints"],
+                unlock_joints_mask=options["unlock_joints_mask"],
             )
         except ValueError as exc:
             raise HalError(f"motmod: {exc}") from None
+        settings = _ini_settings()
+        try:
+            for axis, ratio in settings.eoffset_ratios.items():
+                self.controller.eoffsets.set_ratio(axis, ratio)
+        except ValueError as exc:
+            raise HalError(f"motmod: {exc}") from None
+        for axis, joint in settings.locking_joints.items():
+            problem = self.controller.indexers.set_axis_joint(axis, joint)
+            if problem:
+                raise HalError(f"motmod: [AXIS_{AXIS_LETTERS[axis].upper()}]: {problem}")
         hal = host.hal
         io = {"num_dio": options["num_dio"], "num_aio": options["num_aio"]}
         self.motion = MotionPins.create(hal, comp, "motion", io)
         self.joints = [
             JointPins.create(hal, comp, f"joint.{i}") for i in range(options["num_joints"])
+        ]
+        mask = options["unlock_joints_mask"]
+        self.unlock_pins = {
+            i: UnlockPins.create(hal, comp, f"joint.{i}")
+            for i in range(options["num_joints"])
+            if mask >> i & 1
+        }
+        extra = self.controller.extra_joints
+        self.posthome_pins = [
+            PosthomePins.create(hal, comp, f"joint.{i}")
+            for i in range(extra.first, extra.first + extra.count)
         ]
         letters = [AXIS_LETTERS[i] for i in range(9) if getattr(kins, "axis_mask", 0b111) >> i & 1]
         self.axes = {
@@ -194,9 +250,11 @@ class Motmod:
         self.status = emc.EMC_MOTION_STAT()
         self._status_bytes = self.status.byte_view()
         self._published = b""  # the status record as last written (see _publish)
+        self.status.numExtraJoints = options["num_extrajoints"]
+        self._eoffsets_written: tuple = ()
         self.pending_errors: list[str] = []
         # the safety board: E-stop/abort requests, heartbeats, jog leases (motion/safety.py)
-        self.safety = MotionSafety.open(self.controller, period_s, _heartbeat_timeout())
+        self.safety = MotionSafety.open(self.controller, period_s, settings.heartbeat_timeout)
         self._is_period_error_said = False  # (an internal error, since motion was last on)
         self._is_failure_said = False  # (a fault outside the controller, see _fail)
         self.hal = hal
@@ -218,6 +276,10 @@ class Motmod:
             spindles=[SpindleInputs() for _ in self.spindles],
             joint_wheels=[WheelInputs() for _ in self.joints],
             axis_wheels={index: WheelInputs() for index in self.axes},
+            eoffsets={
+                axis: EoffsetInputs() for axis in self.controller.eoffsets.axes if axis in self.axes
+            },
+            posthome_cmd=[0.0] * len(self.posthome_pins),
         )
         host.add_function(comp, "motion-command-handler", self.command_handler)
         host.add_function(comp, "motion-controller", self.controller_period)
@@ -296,6 +358,15 @@ class Motmod:
             _read_wheel(pins, inputs.joint_wheels[index])
         for index, pins in self.axes.items():
             _read_wheel(pins, inputs.axis_wheels[index])
+        for index, eoffset in inputs.eoffsets.items():
+            pins = self.axes[index]
+            eoffset.is_enabled, eoffset.is_clear = pins.eoffset_enable, pins.eoffset_clear
+            eoffset.counts, eoffset.scale = pins.eoffset_counts, pins.eoffset_scale
+        for k, pins in enumerate(self.posthome_pins):
+            inputs.posthome_cmd[k] = pins.posthome_cmd
+        joints = self.controller.joints
+        for index, pins in self.unlock_pins.items():
+            joints[index].is_unlocked = pins.is_unlocked
         motion_pins = self.motion
         inputs.probe = motion_pins.probe_input
         inputs.enable = motion_pins.enable
@@ -409,6 +480,10 @@ class Motmod:
         pose = controller.carte_pos_cmd.as_tuple()
         for index, pins in self.axes.items():
             pins.pos_cmd = pose[index]
+        for index, pins in self.unlock_pins.items():
+            pins.unlock = controller.joints[index].is_unlock_requested
+        if self.inputs.eoffsets:
+            self._write_eoffsets(is_all)
         tp = controller.tp
         motion = self.motion
         motion.program_line = tp.motion_id
@@ -462,6 +537,29 @@ class Motmod:
             pins.orient_mode = bool(spindle.orient_mode)
             pins.locked = spindle.is_locked
 
+    def _write_eoffsets(self, is_all: bool) -> None:
+        """The external offsets' pins and status (axis.L.pos-cmd without the offset, as
+        LinuxCNC), written when they change."""
+        eoffsets = self.controller.eoffsets
+        offsets = eoffsets.offsets()
+        pose = self.controller.carte_pos_cmd.as_tuple()
+        for index in self.inputs.eoffsets:
+            self.axes[index].pos_cmd = pose[index] - offsets[index]
+        state = (*offsets, *eoffsets.request, eoffsets.is_active, eoffsets.is_limited)
+        if not is_all and state == self._eoffsets_written:
+            return
+        self._eoffsets_written = state
+        for index in self.inputs.eoffsets:
+            pins = self.axes[index]
+            pins.eoffset, pins.eoffset_request = offsets[index], eoffsets.request[index]
+        self.motion.eoffset_active = eoffsets.is_active
+        self.motion.eoffset_limited = eoffsets.is_limited
+        status = self.status
+        status.external_offsets_applied = eoffsets.is_active
+        status.eoffset_pose.from_flat(offsets)
+        self.pending_errors.extend(eoffsets.notes)
+        eoffsets.notes.clear()
+
     def _publish(self) -> None:
         # written only when it changed: a machine at rest writes nothing, so task (which
         # reads it when its change counter moves) and the UIs stay idle too
@@ -480,18 +578,32 @@ class Motmod:
             self.pending_errors.pop(0)
 
 
-def _heartbeat_timeout() -> float:
-    """[EMCMOT]HEARTBEAT_TIMEOUT of the machine's INI ($CNC_INI_FILE, from the launcher)."""
+def _ini_settings() -> IniSettings:
+    """What motion reads of the machine's INI ($CNC_INI_FILE, from the launcher, which
+    checked it against cnc/inischema.py): [EMCMOT]HEARTBEAT_TIMEOUT, and per axis
+    OFFSET_AV_RATIO and LOCKING_INDEXER_JOINT. Defaults without an INI file."""
+    settings = IniSettings()
     path = os.environ.get("CNC_INI_FILE")
     if not path:
-        return DEFAULT_HEARTBEAT_TIMEOUT_S
+        return settings
     from cnc.ini import IniError, IniFile
 
     try:
-        value = IniFile.load(path).get_float("EMCMOT", "HEARTBEAT_TIMEOUT")
+        ini = IniFile.load(path)
+        value = ini.get_float("EMCMOT", "HEARTBEAT_TIMEOUT")
+        if value is not None:
+            settings.heartbeat_timeout = value
+        for axis, letter in enumerate(AXIS_LETTERS):
+            section = f"AXIS_{letter.upper()}"
+            ratio = ini.get_float(section, "OFFSET_AV_RATIO")
+            if ratio:
+                settings.eoffset_ratios[axis] = ratio
+            joint = ini.get_int(section, "LOCKING_INDEXER_JOINT")
+            if joint is not None and joint >= 0:
+                settings.locking_joints[axis] = joint
     except (IniError, OSError, ValueError):
-        return DEFAULT_HEARTBEAT_TIMEOUT_S
-    return DEFAULT_HEARTBEAT_TIMEOUT_S if value is None else value
+        return settings
+    return settings
 
 
 def _read_wheel(pins: JointPins | AxisPins, wheel: WheelInputs) -> None:

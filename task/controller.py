@@ -33,6 +33,7 @@ from collections import deque
 from collections.abc import Callable, Iterable, Sequence
 
 from cnc.ini import IniFile
+from cnc.inischema import io_program
 from nml import emc
 from nml.channels import (
     EMC_COMMAND,
@@ -132,6 +133,11 @@ class Task:
         self.nml = nml
         self.stat = emc.EMC_STAT()
         self.stat.status = RCS_STATUS.DONE  # idle with no command yet, as LinuxCNC's task
+        # [EMCIO]EMCIO set but empty: the launcher starts no iocontrol, as LinuxCNC's
+        # (orphans/axis_noio.ini; without the key LinuxCNC starts its io). E-stop is then
+        # motion's and the safety board's alone; tool, coolant and lube commands are
+        # refused (see _send_io)
+        self.has_iocontrol = bool(io_program(ini))
         canon_setup = CanonSetup(
             linear_units=self.setup.linear_units,
             axis_mask=self.setup.axis_mask,
@@ -1046,6 +1052,10 @@ class Task:
         return self._await(MOTION_STATUS, "motion", self.last_motion_serial) if is_waiting else None
 
     def _send_io(self, msg: emc.NMLmsg, is_waiting: bool = False) -> str | None:
+        if not self.has_iocontrol:
+            if isinstance(msg, _IO_OPTIONAL):
+                return None  # nothing to tell an iocontrol that is not there
+            return f"cannot {msg.NAME}: this machine has no iocontrol ([EMCIO]EMCIO is empty)"
         try:
             self.last_io_serial = self.nml[TOOL_COMMAND].write(msg)
         except NmlError as exc:
@@ -1258,3 +1268,12 @@ def _writable_dirs(ini: IniFile, setup: MachineSetup) -> list[str]:
 def _store(pose: emc.EmcPose, values: Sequence[float]) -> None:
     pose.tran.x, pose.tran.y, pose.tran.z = values[0], values[1], values[2]
     pose.a, pose.b, pose.c, pose.u, pose.v, pose.w = values[3:9]
+
+
+# What task tells iocontrol about E-stop and aborts: nothing to do without one.
+_IO_OPTIONAL = (
+    emc.EMC_AUX_ESTOP_ON,
+    emc.EMC_AUX_ESTOP_OFF,
+    emc.EMC_AUX_ESTOP_RESET,
+    emc.EMC_TOOL_ABORT,
+)

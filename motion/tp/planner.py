@@ -144,6 +144,7 @@ class Move:
     is_waiting_for_at_speed: bool = False  # starts once the spindle is at speed
     is_waiting_for_index: bool = False  # first move of a G33 chain: starts at the index
     rigid_tap: RigidTap | None = None
+    indexer_joint: int = -1  # a locking indexer's move: starts and ends at rest (motion/indexer.py)
 
 
 class TrajectoryPlanner:
@@ -282,6 +283,11 @@ class TrajectoryPlanner:
         return not self._moves and self.vel == 0.0
 
     @property
+    def end_position(self) -> list[float]:
+        """Where the queued moves end (where the next move starts)."""
+        return self._end.tolist()
+
+    @property
     def pose(self) -> EmcPose:
         return EmcPose(*self.pos.tolist())
 
@@ -351,10 +357,13 @@ class TrajectoryPlanner:
         tolerance: float = 0.0,
         is_rapid: bool = False,
         probe: ProbeType | None = None,
+        indexer_joint: int = -1,
     ) -> None:
-        """Queue a straight move to ``end`` (SET_LINE, MOT-053)."""
+        """Queue a straight move to ``end`` (SET_LINE, MOT-053); ``indexer_joint``: the
+        locking indexer joint it turns (the move starts from rest, see motion/indexer.py)."""
         end_v = self._check_target(end)
         move = self._new_move(motion_id, vel, ini_maxvel, acc, term, tolerance, is_rapid, probe)
+        move.indexer_joint = indexer_joint
         piece = LinePiece(move, self._end, end_v)
         if piece.length <= EPS:
             return  # nothing to do: LinuxCNC drops zero-length moves too
@@ -524,7 +533,7 @@ class TrajectoryPlanner:
         prev_term = prev_move.term
         if prev_term is _STOP or prev_move.probe is not None:
             return index  # exact stop: exit stays 0
-        if move.is_waiting_for_at_speed or move.is_waiting_for_index:
+        if move.is_waiting_for_at_speed or move.is_waiting_for_index or move.indexer_joint >= 0:
             return index  # the move starts at rest (it may have to wait)
         is_threading = prev_move.sync == _POSITION or move.sync == _POSITION
         if is_threading and prev_move.sync != move.sync:

@@ -19,9 +19,6 @@ INSTALLED = Path("/usr/share/doc/linuxcnc/examples/sample-configs")
 NOT_MACHINES = {"sim/axis/panelui-demo/_panelui.ini", "sim/craftsman/cnc_settings.ini"}
 # Refused by design, each with the reason the start-up gives
 REFUSED = {
-    # trivkins coordinates=xz makes Z joint 1, which has no [JOINT_1] (it has a [JOINT_2]):
-    # LinuxCNC runs Z with default limits and speeds, issue 14 item 9 refuses that
-    "sim/axis/panelui-demo/panelui-demo.ini": "[KINS]JOINTS = 2 but [JOINT_1] is missing",
     # LinuxCNC's layout before 2.8, which its launcher converts (update_ini) before running
     "sim/axis/vismach/rolfmill/rolfmill.ini": "an INI file in LinuxCNC's layout before 2.8",
     "sim/craftsman/craftsmancnc-axis.ini": "an INI file in LinuxCNC's layout before 2.8",

@@ -179,11 +179,15 @@ def test_an_empty_ini_file_lacks_what_linuxcnc_cannot_start_without(tmp_path: Pa
     ]
 
 
-def test_a_joint_without_its_section_is_refused(tmp_path: Path) -> None:
+def test_a_joint_without_its_section_runs_on_defaults_with_a_warning(tmp_path: Path) -> None:
+    """As LinuxCNC (its panelui-demo.ini has no [JOINT_1]), with a warning saying so."""
     text = MACHINE.replace("[JOINT_1]\nMIN_LIMIT = -100\nMAX_LIMIT = 100\n", "")
     path = machine(tmp_path, text)
     line = line_of(path, "KINS", "JOINTS")
-    assert refused(path) == [f"{path}:{line}: [KINS]JOINTS = 3 but [JOINT_1] is missing"]
+    warnings = "\n".join(load_config(path).warnings)
+    assert f"{path}:{line}: [KINS]JOINTS = 3 but [JOINT_1] is missing: LinuxCNC's defaults" in (
+        warnings
+    )
 
 
 def test_a_trivkins_joint_of_an_axis_not_used_may_go_without_a_section(tmp_path: Path) -> None:
@@ -196,9 +200,10 @@ def test_a_trivkins_joint_of_an_axis_not_used_may_go_without_a_section(tmp_path:
     assert f"{path}:{line}: there is no [JOINT_1]: trivkins joint 1 is axis Y" in "\n".join(
         config.warnings
     )
-    # with coordinates=xz the second joint is Z: its section is needed
+    # with coordinates=xz the second joint is Z: it runs on defaults, with a warning
     path = machine(tmp_path, text, KINS__KINEMATICS="trivkins coordinates=xz", KINS__JOINTS="2")
-    assert refused(path)[0].endswith("[KINS]JOINTS = 2 but [JOINT_1] is missing")
+    warnings = "\n".join(load_config(path).warnings)
+    assert "[KINS]JOINTS = 2 but [JOINT_1] is missing: LinuxCNC's defaults" in warnings
 
 
 def test_limits_must_be_in_order(tmp_path: Path) -> None:

@@ -6,9 +6,10 @@ from pathlib import Path
 
 import pytest
 
-from cnc.ini import IniError
-from cnc.inischema import SCHEMA
+from cnc.ini import IniError, IniFile
+from cnc.inischema import SCHEMA, check_tool_table, read_config
 from iocontrol.config import load_io_config
+from iocontrol.tooltable import ToolTable
 
 
 def write_ini(folder: Path, text: str) -> Path:
@@ -70,10 +71,42 @@ def test_bad_random_toolchanger_is_fatal(tmp_path: Path) -> None:
     ("table", "cause"),
     [
         ("T1 P1 Z1\nT2 P2 Z+nan\n", "2: Z = nan is not a finite number"),
-        ("T1 P1 Z1\nT2 P2 K3\n", "2: unknown word 'K3'"),
+        ("T1 P1 Z1\nT2 P2 Z1,5\n", "2: bad number in word 'Z1,5'"),  # LinuxCNC reads Z1
     ],
 )
-def test_a_bad_tool_table_line_stops_iocontrol(tmp_path: Path, table: str, cause: str) -> None:
+def test_a_tool_table_line_linuxcnc_misreads_stops_iocontrol(
+    tmp_path: Path, table: str, cause: str
+) -> None:
     (tmp_path / "tool.tbl").write_text(table)
     with pytest.raises(IniError, match=f"tool.tbl:{cause}"):
         load_io_config(write_ini(tmp_path, "[EMCIO]\n"))
+
+
+@pytest.mark.parametrize(
+    ("table", "cause"),
+    [
+        ("TOOLNO POCKET LENGTH\nT1 P1 Z1\n", "1: bad number in word 'TOOLNO'"),  # old format
+        ("T1 P1 Z1\nT2 P2 K3\n", "2: unknown word 'K3'"),
+    ],
+)
+def test_a_line_linuxcnc_skips_is_a_warning_and_blocks_saving(
+    tmp_path: Path, table: str, cause: str
+) -> None:
+    """LinuxCNC skips such a line: so do we, saying where and why; saving the table over
+    its file would lose the line, so iocontrol never does (test_iocontrol_process)."""
+    (tmp_path / "tool.tbl").write_text(table)
+    load_io_config(write_ini(tmp_path, "[EMCIO]\n"))  # starts
+    config = read_config(IniFile.load(tmp_path / "machine.ini"), is_machine=False)
+    assert check_tool_table(config) == []
+    assert any(f"tool.tbl:{cause}: line skipped" in w for w in config.warnings)
+    assert any("will not be saved over" in w for w in config.warnings)
+
+
+def test_pocket_0_in_a_nonrandom_table_is_accepted_with_a_warning(tmp_path: Path) -> None:
+    (tmp_path / "tool.tbl").write_text("T3 P0 D3\nT1 P2 D1\n")  # LinuxCNC's nstools.tbl
+    config = read_config(IniFile.load(write_ini(tmp_path, "[EMCIO]\n")), is_machine=False)
+    assert check_tool_table(config) == []
+    assert any("tool.tbl:1: pocket 0 is not positive (accepted" in w for w in config.warnings)
+    table = ToolTable()
+    table.load(tmp_path / "tool.tbl")
+    assert (table.get(1).toolno, table.get(1).pocketno, table.has_unreadable_lines) == (3, 0, False)

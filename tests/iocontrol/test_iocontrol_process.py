@@ -390,15 +390,16 @@ def test_restart_after_kill_takes_over(machine_factory: Callable[..., Machine]) 
 @pytest.mark.parametrize(
     ("table", "cause"),
     [
-        ("T1 P1\nT2 P2 Q\n", "bad number in word 'Q'"),
+        ("T1 P1\nT2 P2 Q1x\n", "bad number in word 'Q1x'"),  # LinuxCNC would read Q1
         ("T1 P1 Z2\nT2 P2 Z+nan\n", "Z = nan is not a finite number"),
-        ("T1 P1\n\x00\x01\x02 garbage\n", "unknown word '\\x00\\x01\\x02'"),
+        ("T1 P1\nT2 P2 D1.5mm\n", "bad number in word 'D1.5mm'"),
     ],
 )
 def test_a_malformed_tool_table_stops_iocontrol_before_it_starts(
     procs: Processes, tmp_path: Path, table: str, cause: str
 ) -> None:
-    """Never a machine with an empty tool table, and the user's file left as it is."""
+    """A line LinuxCNC would misread: never a machine with a wrong or empty tool table,
+    and the user's file left as it is."""
     ini = write_config(tmp_path, table)
     proc = procs.python("-m", "iocontrol", "-ini", str(ini))
     _, err = proc.communicate(timeout=WAIT_S)
@@ -440,3 +441,21 @@ def test_commands_with_any_field_values_are_answered_and_nothing_is_lost(machine
     table = ToolTable()
     assert table.load(machine.table) == []  # (no complaints)
     assert machine.run(emc.EMC_TOOL_LOAD_TOOL_TABLE(file="")).status == RCS_STATUS.DONE
+
+
+def test_a_table_with_lines_linuxcnc_skips_loads_but_is_never_saved_over(
+    machine_factory: Callable[..., Machine],
+) -> None:
+    """An old-format table (LinuxCNC's gantry_mm.tbl): the lines LinuxCNC skips are
+    skipped, the rest is used, and no change is written over the file (it would lose
+    those lines): the change is refused with a message saying so."""
+    text = "TOOLNO POCKET LENGTH\nT1 P1 Z0.5 ;one\n     2      2    +0.100000\n"
+    machine = machine_factory(text)
+    st = machine.run(emc.EMC_TOOL_SET_NUMBER(tool=1))
+    assert (st.tool.toolInSpindle, st.tool.toolTableCurrent.offset.tran.z) == (1, 0.5)
+    offset = emc.EmcPose()
+    offset.tran.z = 2.0
+    st = machine.run(emc.EMC_TOOL_SET_OFFSET(pocket=1, toolno=1, offset=offset, diameter=3))
+    assert st.status == RCS_STATUS.ERROR
+    assert any("could not be read (saving would lose them)" in t for t in machine.errors())
+    assert machine.table.read_text() == text

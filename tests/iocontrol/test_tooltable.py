@@ -62,8 +62,8 @@ def test_random_changer_indexes_by_pocket(tmp_path) -> None:
     [
         ("T1 P1 Z0.5\nT2 P2 K3\n", "2: unknown word 'K3'"),
         ("T1 P1 Zabc\n", "1: bad number in word 'Zabc'"),
-        ("T0 P1\n", "1: tool number 0 must be positive"),
-        ("T1 P-1\n", "1: pocket -1 must be 0 or more"),
+        ("T1 P1 Z0.5\nT2 P2 Z1.5x\n", "2: bad number in word 'Z1.5x'"),
+        ("T1 P1 Z1,5\n", "1: bad number in word 'Z1,5'"),
         ("P3 Z1\n", "1: T word missing"),
     ],
 )
@@ -117,3 +117,38 @@ def test_entries_are_copies() -> None:
     entry = table.get(1)
     entry.toolno = 6
     assert table.get(1).toolno == 5
+
+
+@pytest.mark.parametrize(
+    ("text", "warning"),
+    [
+        ("T1 P1 Z0.5\nT2 P2 K3\n", "2: unknown word 'K3': line skipped"),
+        ("T1 P1 Z0.5\nT2 P2 Zabc\n", "2: bad number in word 'Zabc': line skipped"),
+        ("TOOLNO POCKET\nT1 P1 Z0.5\n", "1: bad number in word 'TOOLNO': line skipped"),
+    ],
+)
+def test_lines_linuxcnc_skips_are_skipped_with_a_warning(tmp_path, text: str, warning: str):
+    path = tmp_path / "tool.tbl"
+    path.write_text(text)
+    table = ToolTable()
+    table.load(path)
+    assert [str(w) for w in table.warnings] == [f"{path}:{warning}, as LinuxCNC does"]
+    assert table.has_unreadable_lines  # iocontrol never saves it over the file
+    assert table.get(1).toolno == 1 and table.get(2).toolno == -1
+
+
+@pytest.mark.parametrize(
+    ("text", "warning"),
+    [
+        ("T0 P1\n", "1: tool number 0 is not positive"),
+        ("T1 P0\n", "1: pocket 0 is not positive"),
+    ],
+)
+def test_what_linuxcnc_accepts_is_loaded_with_a_warning(tmp_path, text: str, warning: str):
+    path = tmp_path / "tool.tbl"
+    path.write_text(text)
+    table = ToolTable()
+    table.load(path)
+    assert [str(w) for w in table.warnings] == [f"{path}:{warning} (accepted, as LinuxCNC)"]
+    assert not table.has_unreadable_lines
+    assert table.get(1).toolno == int(text[1])
