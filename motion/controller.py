@@ -43,6 +43,7 @@ from motion.teleop import Fit, JointLimiter, JointLimits, TeleopPlanner
 from motion.tp import TermCond, TrajectoryPlanner
 from motion.tp.planner import ProbeType
 from nml import emc
+from nml.commands import Handlers, Refused, handler
 
 FREE, COORD, TELEOP = (
     emc.EMC_TRAJ_MODE_ENUM.FREE,
@@ -243,13 +244,17 @@ class MotionController:
         self._status_runs: MotionStatusRuns | None = None  # of the last fill_status's record
         # continuous jogs and who asked for them: (is joint, index) -> lease (motion/safety.py)
         self.jog_leases: dict[tuple[bool, int], JogLease] = {}
+        self.handlers = Handlers(self)  # the @handler methods below
 
     # ================================================================ commands
     def handle(self, cmd: emc.NMLmsg) -> str | None:
         """Carry out one command; ``None`` if done, else why it was refused ("" when it
-        says nothing new: a command after a refused move, see ``is_after_refused_move``)."""
-        handler = _HANDLERS.get(type(cmd))
-        if handler is None:
+        says nothing new: a command after a refused move, see ``is_after_refused_move``).
+        Handlers (``@handler``) raise ``Refused``; a ValueError or a kinematics error is a
+        refusal too, naming the command. Any other exception goes to the caller (motmod:
+        an internal error, motion off)."""
+        function = self.handlers.get(type(cmd))
+        if function is None:
             return f"motion does not handle {cmd.NAME}"
         if self.is_after_refused_move:
             if type(cmd) not in _ENDS_A_REFUSED_PROGRAM:
@@ -259,10 +264,13 @@ class MotionController:
         if is_move and cmd.id:  # task stamps the line into the move (emcmotCommand.id)
             self.next_motion_id = cmd.id  # (0: the last EMC_TRAJ_SET_MOTION_ID's stays)
         try:
-            problem = handler(self, cmd)
+            function(cmd)
+            return None
+        except Refused as refusal:
+            problem = refusal.reason
         except (ValueError, KinematicsError) as exc:
             problem = f"{cmd.NAME}: {exc}"
-        if problem and is_move:
+        if is_move:
             self.is_after_refused_move = True
         return problem
 
@@ -271,18 +279,18 @@ class MotionController:
             raise ValueError(f"joint {index} does not exist (0..{len(self.joints) - 1})")
         return self.joints[index]
 
+    @handler(emc.EMC_TRAJ_ENABLE)
     def _enable(self, _cmd: emc.NMLmsg) -> None:
         self.is_enabled = True
         self.is_faulted = [False] * len(self.joints)
         for joint in self.joints:
             joint.hold_position()
-        return None
 
+    @handler(emc.EMC_TRAJ_DISABLE)
     def _disable(self, _cmd: emc.NMLmsg | None = None) -> None:
         """Motion off: everything stops where it is, the queue is emptied (MOT-021)."""
         self.is_enabled = False
         self._stop_everything_now()
-        return None
 
     def estop(self) -> None:
         """E-stop from the safety board: motion off at once and every spindle stopped,
@@ -316,6 +324,7 @@ class MotionController:
         self.tp.set_position(list(self.carte_pos_cmd))
         self._reset_teleop()
 
+    @handler(emc.EMC_TRAJ_ABORT, emc.EMC_MOTION_ABORT)
     def _abort(self, _cmd: emc.NMLmsg | None) -> None:
         """ABORT: always accepted, idempotent; decelerates, then empties the queue (MOT-022)."""
         self.jog_leases.clear()
@@ -325,18 +334,18 @@ class MotionController:
         self._stop_teleop()
         self.tp.abort()
         self._orient_wait = None
-        return None
 
-    def _set_mode(self, cmd: emc.EMC_TRAJ_SET_MODE) -> str | None:
+    @handler(emc.EMC_TRAJ_SET_MODE)
+    def _set_mode(self, cmd: emc.EMC_TRAJ_SET_MODE) -> None:
         mode = cmd.mode
         if mode == self.mode:
-            return None
+            return
         if mode not in (FREE, COORD, TELEOP):
-            return f"unknown trajectory mode {mode}"
+            raise Refused(f"unknown trajectory mode {mode}")
         if self._is_moving():
-            return "cannot change mode while moving"
+            raise Refused("cannot change mode while moving")
         if mode in (COORD, TELEOP) and not all(j.is_homed for j in self.joints):
-            return "all joints must be homed before going into coordinated mode"
+            raise Refused("all joints must be homed before going into coordinated mode")
         if mode == TELEOP:
             self._reset_teleop()
         if mode == COORD:
@@ -345,7 +354,6 @@ class MotionController:
             for joint in self.joints:
                 joint.planner.reset(joint.pos_cmd)
         self.mode = mode
-        return None
 
     def _is_moving(self) -> bool:
         # (teleop motion only exists in teleop mode: leaving it waits for rest)
@@ -358,26 +366,27 @@ class MotionController:
         )
 
     # ---------------------------------------------------------------- jogs (free mode)
-    def _jog(self, cmd: emc.NMLmsg) -> str | None:
+    @handler(emc.EMC_JOG_CONT, emc.EMC_JOG_INCR, emc.EMC_JOG_ABS, emc.EMC_JOG_STOP)
+    def _jog(self, cmd: emc.NMLmsg) -> None:
         """Jog a joint in free mode, or a world axis in teleop mode (MOT-045..052)."""
         if not self.is_enabled:
-            return "cannot jog with motion disabled"
+            raise Refused("cannot jog with motion disabled")
         if self.homing.is_homing:
-            return "cannot jog while homing"
+            raise Refused("cannot jog while homing")
         if self.is_jog_inhibited and not isinstance(cmd, emc.EMC_JOG_STOP):
-            return "jogging is inhibited (motion.jog-inhibit)"
+            raise Refused("jogging is inhibited (motion.jog-inhibit)")
         index = cmd.joint_or_axis
         if cmd.jjogmode == emc.JOG_MODE.JOINT:
             if self.mode != FREE:
-                return "jogging a joint needs free (joint) mode"
+                raise Refused("jogging a joint needs free (joint) mode")
             joint = self._joint(index)
             planner, name = joint.planner, f"joint {index}"
             override = self.is_override_limits or not joint.is_homed
         else:
             if self.mode != TELEOP:
-                return "jogging an axis needs teleop mode (teleop_enable(1) once homed)"
+                raise Refused("jogging an axis needs teleop mode (teleop_enable(1) once homed)")
             if not 0 <= index < NUM_AXES or not self._has_axis(index):
-                return f"axis {index} is not used by this machine"
+                raise Refused(f"axis {index} is not used by this machine")
             planner, name = self.axis_planners[index], f"axis {AXIS_LETTERS[index].upper()}"
             override = self.is_override_limits
         try:
@@ -391,13 +400,12 @@ class MotionController:
             else:
                 planner.jog_abs(cmd.pos, abs(cmd.vel), override)
         except JogLimitError as exc:
-            return f"{name}: {exc}"
+            raise Refused(f"{name}: {exc}") from None
         key = (cmd.jjogmode == emc.JOG_MODE.JOINT, index)
         if isinstance(cmd, emc.EMC_JOG_CONT):  # runs while its requester keeps the lease
             self.jog_leases[key] = JogLease(name, cmd.lease_slot, cmd.lease_pid)
         else:
             self.jog_leases.pop(key, None)
-        return None
 
     def jog_planner(self, key: tuple[bool, int]) -> FreePlanner:
         """The planner of a jog lease's key: (is joint, index)."""
@@ -416,21 +424,21 @@ class MotionController:
         return bool(getattr(self.kins, "axis_mask", 0b111) >> index & 1)
 
     # ---------------------------------------------------------------- teleop (MOT-016)
-    def _teleop_vector(self, cmd: emc.EMC_TRAJ_SET_TELEOP_VECTOR) -> str | None:
+    @handler(emc.EMC_TRAJ_SET_TELEOP_VECTOR)
+    def _teleop_vector(self, cmd: emc.EMC_TRAJ_SET_TELEOP_VECTOR) -> None:
         """SET_TELEOP_VECTOR (MOT-055): the cartesian velocity teleop mode follows, on top
         of any axis jogs; a zero vector brings it to a coordinated stop."""
         if self.mode != TELEOP:
-            return "teleop vector needs teleop mode"
+            raise Refused("teleop vector needs teleop mode")
         if not self.is_enabled:
-            return "teleop vector needs motion enabled"
+            raise Refused("teleop vector needs motion enabled")
         vector = _pose(cmd.vector).as_tuple()
         if any(vector) and self.is_jog_inhibited:
-            return "jogging is inhibited (motion.jog-inhibit)"
+            raise Refused("jogging is inhibited (motion.jog-inhibit)")
         for index, value in enumerate(vector):
             if value and not self._has_axis(index):
-                return f"axis {AXIS_LETTERS[index].upper()} is not used by this machine"
+                raise Refused(f"axis {AXIS_LETTERS[index].upper()} is not used by this machine")
         self.teleop.set_velocity(vector)
-        return None
 
     def _reset_teleop(self) -> None:
         """Teleop at rest where the pose is (entering teleop MOT-027, motion off)."""
@@ -550,11 +558,12 @@ class MotionController:
                 )
         return "\n".join(problems) or None
 
-    def _linear_move(self, cmd: emc.EMC_TRAJ_LINEAR_MOVE) -> str | None:
+    @handler(emc.EMC_TRAJ_LINEAR_MOVE)
+    def _linear_move(self, cmd: emc.EMC_TRAJ_LINEAR_MOVE) -> None:
         end = _pose(cmd.end)
         problem = self._require_coord() or self._check_soft_limits(end, "Linear move")
         if problem:
-            return problem
+            raise Refused(problem)
         self._note_move_type(cmd.type == emc.EMC_MOTION_TYPE.TRAVERSE)
         self.tp.add_line(
             list(end),
@@ -567,13 +576,13 @@ class MotionController:
             is_rapid=cmd.type == emc.EMC_MOTION_TYPE.TRAVERSE,
         )
         self._flush_synchronised_outputs()
-        return None
 
-    def _circular_move(self, cmd: emc.EMC_TRAJ_CIRCULAR_MOVE) -> str | None:
+    @handler(emc.EMC_TRAJ_CIRCULAR_MOVE)
+    def _circular_move(self, cmd: emc.EMC_TRAJ_CIRCULAR_MOVE) -> None:
         end = _pose(cmd.end)
         problem = self._require_coord() or self._check_soft_limits(end, "Circular move")
         if problem:
-            return problem
+            raise Refused(problem)
         self._note_move_type(is_rapid=False)
         # LinuxCNC's turn: n >= 0 counter-clockwise about the normal plus n full turns;
         # -1, -2 ... clockwise (one arc, plus -turn - 1 full turns): the other way round
@@ -595,7 +604,6 @@ class MotionController:
             tolerance=self.tolerance,
         )
         self._flush_synchronised_outputs()
-        return None
 
     def _note_move_type(self, is_rapid: bool) -> None:
         """In CSS mode a feed after a rapid waits for the spindle's new speed (motion(9))."""
@@ -604,15 +612,15 @@ class MotionController:
             self.tp.wait_for_spindle_at_speed()
         self._is_last_move_rapid = is_rapid
 
-    def _probe(self, cmd: emc.EMC_TRAJ_PROBE) -> str | None:
+    @handler(emc.EMC_TRAJ_PROBE)
+    def _probe(self, cmd: emc.EMC_TRAJ_PROBE) -> None:
         end = _pose(cmd.pos)
         problem = self._require_coord() or self._check_soft_limits(end, "Probe move")
         if problem:
-            return problem
+            raise Refused(problem)
         # probe_type as in LinuxCNC: bit 1 set = away (G38.4/5), bit 0 = no error if no trip
         probe = ProbeType.AWAY if cmd.probe_type & 2 else ProbeType.TOWARD
         self.tp.add_probe(list(end), cmd.vel, cmd.ini_maxvel, cmd.acc, self.next_motion_id, probe)
-        return None
 
     def _flush_synchronised_outputs(self) -> None:
         """M62/M64-style outputs queued with the next move take effect now (MOT-060/061)."""
@@ -624,46 +632,52 @@ class MotionController:
         self._pending_aouts.clear()
 
     # ---------------------------------------------------------------- settings
-    def _set_term_cond(self, cmd: emc.EMC_TRAJ_SET_TERM_COND) -> str | None:
+    @handler(emc.EMC_TRAJ_SET_TERM_COND)
+    def _set_term_cond(self, cmd: emc.EMC_TRAJ_SET_TERM_COND) -> None:
         if cmd.cond not in _TERM_CONDS:
-            return f"unknown termination condition {cmd.cond}"
+            raise Refused(f"unknown termination condition {cmd.cond}")
         if cmd.tolerance < 0:
-            return f"negative blend tolerance {cmd.tolerance}"
+            raise Refused(f"negative blend tolerance {cmd.tolerance}")
         self.term_cond = _TERM_CONDS[emc.EMC_TRAJ_TERM_COND(cmd.cond)]
         self.tolerance = cmd.tolerance
-        return None
 
-    def _set_velocity(self, cmd: emc.EMC_TRAJ_SET_VELOCITY) -> str | None:
+    @handler(emc.EMC_TRAJ_SET_VELOCITY)
+    def _set_velocity(self, cmd: emc.EMC_TRAJ_SET_VELOCITY) -> None:
         if not cmd.velocity > 0:
-            return f"velocity must be positive, got {cmd.velocity}"
+            raise Refused(f"velocity must be positive, got {cmd.velocity}")
         self.traj_vel = cmd.velocity
-        return None
 
-    def _set_acceleration(self, cmd: emc.EMC_TRAJ_SET_ACCELERATION) -> str | None:
+    @handler(emc.EMC_TRAJ_SET_ACCELERATION)
+    def _set_acceleration(self, cmd: emc.EMC_TRAJ_SET_ACCELERATION) -> None:
         if not cmd.acceleration > 0:
-            return f"acceleration must be positive, got {cmd.acceleration}"
+            raise Refused(f"acceleration must be positive, got {cmd.acceleration}")
         self.traj_acc = cmd.acceleration
-        return None
 
-    def _set_max_velocity(self, cmd: emc.EMC_TRAJ_SET_MAX_VELOCITY) -> str | None:
+    @handler(emc.EMC_TRAJ_SET_MAX_VELOCITY)
+    def _set_max_velocity(self, cmd: emc.EMC_TRAJ_SET_MAX_VELOCITY) -> None:
         if not cmd.velocity > 0:
-            return f"maximum velocity must be positive, got {cmd.velocity}"
+            raise Refused(f"maximum velocity must be positive, got {cmd.velocity}")
         self.max_vel = cmd.velocity
         self._apply_traj_limits()
-        return None
 
-    def _set_max_acceleration(self, cmd: emc.EMC_TRAJ_SET_MAX_ACCELERATION) -> str | None:
+    @handler(emc.EMC_TRAJ_SET_MAX_ACCELERATION)
+    def _set_max_acceleration(self, cmd: emc.EMC_TRAJ_SET_MAX_ACCELERATION) -> None:
         if not cmd.acceleration > 0:
-            return f"maximum acceleration must be positive, got {cmd.acceleration}"
+            raise Refused(f"maximum acceleration must be positive, got {cmd.acceleration}")
         self.max_acc = cmd.acceleration
         self._apply_traj_limits()
-        return None
 
-    def _axis_settings(self, cmd: emc.NMLmsg) -> str | None:
+    @handler(
+        emc.EMC_AXIS_SET_MIN_POSITION_LIMIT,
+        emc.EMC_AXIS_SET_MAX_POSITION_LIMIT,
+        emc.EMC_AXIS_SET_MAX_VELOCITY,
+        emc.EMC_AXIS_SET_MAX_ACCELERATION,
+    )
+    def _axis_settings(self, cmd: emc.NMLmsg) -> None:
         """[AXIS_L] limits sent by task at start-up (KIN-002)."""
         axis = cmd.axis
         if not 0 <= axis < NUM_AXES:
-            return f"axis {axis} does not exist (0..{NUM_AXES - 1} for X..W)"
+            raise Refused(f"axis {axis} does not exist (0..{NUM_AXES - 1} for X..W)")
         if isinstance(cmd, emc.EMC_AXIS_SET_MIN_POSITION_LIMIT):
             self.axis_min_limit[axis] = cmd.limit
         elif isinstance(cmd, emc.EMC_AXIS_SET_MAX_POSITION_LIMIT):
@@ -683,43 +697,51 @@ class MotionController:
             self.axis_min_limit[axis],
             self.axis_max_limit[axis],
         )
-        return None
 
     def _apply_traj_limits(self) -> None:
         self.tp.set_limits(self.axis_max_vel, self.axis_max_acc, self.max_vel, self.max_acc)
 
-    def _set_scale(self, cmd: emc.EMC_TRAJ_SET_SCALE) -> str | None:
+    @handler(emc.EMC_TRAJ_SET_SCALE)
+    def _set_scale(self, cmd: emc.EMC_TRAJ_SET_SCALE) -> None:
         self.tp.set_feed_scale(cmd.scale)
         for joint in self.joints:
             joint.planner.scale = max(cmd.scale, 0.0)
-        return None
 
-    def _set_rapid_scale(self, cmd: emc.EMC_TRAJ_SET_RAPID_SCALE) -> str | None:
+    @handler(emc.EMC_TRAJ_SET_RAPID_SCALE)
+    def _set_rapid_scale(self, cmd: emc.EMC_TRAJ_SET_RAPID_SCALE) -> None:
         self.tp.set_rapid_scale(cmd.scale)
-        return None
 
+    @handler(emc.EMC_TRAJ_SET_MOTION_ID)
     def _set_motion_id(self, cmd: emc.EMC_TRAJ_SET_MOTION_ID) -> None:
         self.next_motion_id = cmd.id
-        return None
 
+    @handler(emc.EMC_TRAJ_PAUSE)
     def _pause(self, _cmd: emc.NMLmsg) -> None:
         self.tp.pause()
-        return None
 
+    @handler(emc.EMC_TRAJ_RESUME)
     def _resume(self, _cmd: emc.NMLmsg) -> None:
         self.tp.resume()
-        return None
 
+    @handler(emc.EMC_TRAJ_STEP)
     def _step(self, _cmd: emc.NMLmsg) -> None:
         self.tp.step_once()
-        return None
 
+    @handler(emc.EMC_TRAJ_CLEAR_PROBE_TRIPPED_FLAG)
     def _clear_probe(self, _cmd: emc.NMLmsg) -> None:
         self.tp.clear_probe_flag()
-        return None
 
     # ---------------------------------------------------------------- joints
-    def _joint_limits(self, cmd: emc.NMLmsg) -> str | None:
+    @handler(
+        emc.EMC_JOINT_SET_MIN_POSITION_LIMIT,
+        emc.EMC_JOINT_SET_MAX_POSITION_LIMIT,
+        emc.EMC_JOINT_SET_MAX_VELOCITY,
+        emc.EMC_JOINT_SET_FERROR,
+        emc.EMC_JOINT_SET_MIN_FERROR,
+        emc.EMC_JOINT_SET_BACKLASH,
+        emc.EMC_JOINT_SET_MAX_ACCELERATION,
+    )
+    def _joint_limits(self, cmd: emc.NMLmsg) -> None:
         joint = self._joint(cmd.joint)
         planner = joint.planner
         max_vel, max_acc = planner.max_vel, planner.max_acc
@@ -739,25 +761,25 @@ class MotionController:
         elif isinstance(cmd, emc.EMC_JOINT_SET_BACKLASH):
             joint.set_backlash(cmd.backlash)
         planner.set_limits(max_vel, max_acc, min_limit, max_limit)
-        return None
 
-    def _motor_offset(self, cmd: emc.EMC_JOINT_SET_MOTOR_OFFSET) -> str | None:
+    @handler(emc.EMC_JOINT_SET_MOTOR_OFFSET)
+    def _motor_offset(self, cmd: emc.EMC_JOINT_SET_MOTOR_OFFSET) -> None:
         """Where the joint is, from the saved position file: no motor moves (MOT-005)."""
         joint = self._joint(cmd.joint)
         if self.is_enabled or joint.is_homed:
-            return "the motor offset can only be set while motion is off and unhomed"
+            raise Refused("the motor offset can only be set while motion is off and unhomed")
         joint.motor_offset = check_finite("motor offset", cmd.offset)
         joint.update_feedback(joint.motor_pos_fb)
         joint.hold_position()
         joint.update_command(self.period_s)
-        return None
 
-    def _homing_params(self, cmd: emc.EMC_JOINT_SET_HOMING_PARAMS) -> str | None:
+    @handler(emc.EMC_JOINT_SET_HOMING_PARAMS)
+    def _homing_params(self, cmd: emc.EMC_JOINT_SET_HOMING_PARAMS) -> None:
         """[JOINT_n] homing keys, sent by task at start-up (MOT-043)."""
         index = cmd.joint
         self._joint(index)
         if self.homing.is_homing:
-            return "cannot change homing parameters while homing"
+            raise Refused("cannot change homing parameters while homing")
         sequence = None if cmd.home_sequence == emc.NO_HOME_SEQUENCE else cmd.home_sequence
         self.homing_configs[index] = HomingConfig(
             home=cmd.home,
@@ -774,14 +796,14 @@ class MotionController:
             locking_indexer=bool(cmd.locking_indexer),
         )
         self.homing = self.homing_class(self.joints, self.homing_configs)
-        return None
 
-    def _home(self, cmd: emc.EMC_JOINT_HOME) -> str | None:
+    @handler(emc.EMC_JOINT_HOME)
+    def _home(self, cmd: emc.EMC_JOINT_HOME) -> None:
         """Home one joint, or all (-1) sequence by sequence (MOT-043, homing module)."""
         if self.mode != FREE:
-            return "homing needs free (joint) mode"
+            raise Refused("homing needs free (joint) mode")
         if not self.is_enabled:
-            return "cannot home with motion disabled"
+            raise Refused("cannot home with motion disabled")
         try:
             if cmd.joint == -1:
                 self.homing.home_all()
@@ -789,94 +811,133 @@ class MotionController:
                 self._joint(cmd.joint)
                 self.homing.home_joint(cmd.joint)
         except HomingError as exc:
-            return str(exc)
-        return None
+            raise Refused(str(exc)) from None
 
-    def _unhome(self, cmd: emc.EMC_JOINT_UNHOME) -> str | None:
+    @handler(emc.EMC_JOINT_UNHOME)
+    def _unhome(self, cmd: emc.EMC_JOINT_UNHOME) -> None:
         if self._is_moving():
-            return "cannot unhome while moving"
+            raise Refused("cannot unhome while moving")
         try:
             self.homing.unhome(cmd.joint)
         except HomingError as exc:
-            return str(exc)
-        return None
+            raise Refused(str(exc)) from None
 
+    @handler(emc.EMC_JOINT_OVERRIDE_LIMITS)
     def _override_limits(self, cmd: emc.EMC_JOINT_OVERRIDE_LIMITS) -> None:
         self.is_override_limits = cmd.joint >= 0
-        return None
 
     # ---------------------------------------------------------------- outputs, spindle
-    def _set_dout(self, cmd: emc.EMC_MOTION_SET_DOUT) -> str | None:
+    @handler(emc.EMC_MOTION_SET_DOUT)
+    def _set_dout(self, cmd: emc.EMC_MOTION_SET_DOUT) -> None:
         if cmd.index >= len(self.digital_out):
-            return f"digital output {cmd.index} does not exist (num_dio {len(self.digital_out)})"
+            raise Refused(
+                f"digital output {cmd.index} does not exist (num_dio {len(self.digital_out)})"
+            )
         if cmd.now:
             self.digital_out[cmd.index] = bool(cmd.start)
         else:
             self._pending_douts.append((cmd.index, bool(cmd.start)))
-        return None
 
-    def _set_aout(self, cmd: emc.EMC_MOTION_SET_AOUT) -> str | None:
+    @handler(emc.EMC_MOTION_SET_AOUT)
+    def _set_aout(self, cmd: emc.EMC_MOTION_SET_AOUT) -> None:
         if cmd.index >= len(self.analog_out):
-            return f"analog output {cmd.index} does not exist (num_aio {len(self.analog_out)})"
+            raise Refused(
+                f"analog output {cmd.index} does not exist (num_aio {len(self.analog_out)})"
+            )
         if cmd.now:
             self.analog_out[cmd.index] = cmd.start
         else:
             self._pending_aouts.append((cmd.index, cmd.start))
-        return None
 
-    def _spindle(self, cmd: emc.NMLmsg) -> str | None:
-        """M3/M4/M5, S, brake, M19 and its wait (MOT-065; ``spindle.N.*`` pins)."""
+    def _spindle_of(self, cmd: emc.EMC_SPINDLE_CMD_MSG) -> Spindle:
+        """The spindle a command names; a new command ends a speed ramp (increasing) and
+        at-speed settles again (MOT-065; ``spindle.N.*`` pins)."""
         if not 0 <= cmd.spindle < len(self.spindles):
-            return f"spindle {cmd.spindle} does not exist (num_spindles {len(self.spindles)})"
+            raise Refused(
+                f"spindle {cmd.spindle} does not exist (num_spindles {len(self.spindles)})"
+            )
         spindle = self.spindles[cmd.spindle]
         spindle.increasing = 0
         spindle.settle_periods = AT_SPEED_SETTLE_PERIODS
-        if isinstance(cmd, emc.EMC_SPINDLE_ON):
-            spindle.stop_orienting()
-            spindle.speed = cmd.speed
-            spindle.css_factor, spindle.css_xoffset = cmd.factor, cmd.xoffset
-            spindle.is_brake_on = False
-            if cmd.wait_for_spindle_at_speed:
-                self.tp.wait_for_spindle_at_speed()
-        elif isinstance(cmd, emc.EMC_SPINDLE_OFF):
-            spindle.stop_orienting()
-            spindle.speed = spindle.css_factor = 0.0
-            spindle.is_brake_on = True
-        elif isinstance(cmd, emc.EMC_SPINDLE_SPEED):
-            sign = -1.0 if spindle.speed < 0 else 1.0
-            spindle.speed = sign * abs(cmd.speed) if spindle.speed else 0.0
-            spindle.css_factor = math.copysign(cmd.factor, sign) if spindle.speed else 0.0
-            spindle.css_xoffset = cmd.xoffset
-            if spindle.speed:  # feed moves wait for the new speed (motion(9) at-speed)
-                self.tp.wait_for_spindle_at_speed()
-        elif isinstance(cmd, emc.EMC_SPINDLE_INCREASE | emc.EMC_SPINDLE_DECREASE):
-            step = abs(cmd.speed) or 100.0
-            spindle.increasing = 1
-            if isinstance(cmd, emc.EMC_SPINDLE_DECREASE):
-                step = -min(step, abs(spindle.speed))
-                spindle.increasing = -1
-            spindle.speed += step if spindle.speed >= 0 else -step
-        elif isinstance(cmd, emc.EMC_SPINDLE_BRAKE_ENGAGE):
-            spindle.is_brake_on = True
-        elif isinstance(cmd, emc.EMC_SPINDLE_BRAKE_RELEASE):
-            spindle.is_brake_on = False
-        elif isinstance(cmd, emc.EMC_SPINDLE_ORIENT):
-            # M19: stop, then the drive turns to the angle and answers on is-oriented
-            spindle.speed = spindle.css_factor = 0.0
-            spindle.is_brake_on = spindle.is_locked = False
-            spindle.is_orienting = True
-            spindle.orient_angle, spindle.orient_mode = cmd.orientation, cmd.mode
-            spindle.orient_state, spindle.orient_fault = OrientState.IN_PROGRESS, 0
-        elif isinstance(cmd, emc.EMC_SPINDLE_WAIT_ORIENT_COMPLETE):
-            # the moves after it wait; inpos stays false until it completes (task waits)
-            if spindle.orient_state == OrientState.FAULTED:
-                return f"spindle {cmd.spindle} orient fault {spindle.orient_fault}"
-            timeout = cmd.timeout if cmd.timeout > 0 else math.inf
-            if spindle.orient_state == OrientState.IN_PROGRESS:
-                self._orient_wait = (cmd.spindle, timeout)
-        return None
+        return spindle
 
-    def _settings(self, cmd: emc.NMLmsg) -> str | None:
+    @handler(emc.EMC_SPINDLE_ON)
+    def _spindle_on(self, cmd: emc.EMC_SPINDLE_ON) -> None:
+        """M3/M4 (G96: the CSS factor)."""
+        spindle = self._spindle_of(cmd)
+        spindle.stop_orienting()
+        spindle.speed = cmd.speed
+        spindle.css_factor, spindle.css_xoffset = cmd.factor, cmd.xoffset
+        spindle.is_brake_on = False
+        if cmd.wait_for_spindle_at_speed:
+            self.tp.wait_for_spindle_at_speed()
+
+    @handler(emc.EMC_SPINDLE_OFF)
+    def _spindle_off(self, cmd: emc.EMC_SPINDLE_OFF) -> None:
+        """M5."""
+        spindle = self._spindle_of(cmd)
+        spindle.stop_orienting()
+        spindle.speed = spindle.css_factor = 0.0
+        spindle.is_brake_on = True
+
+    @handler(emc.EMC_SPINDLE_SPEED)
+    def _spindle_speed(self, cmd: emc.EMC_SPINDLE_SPEED) -> None:
+        """S: a new speed in the direction it turns (none while stopped)."""
+        spindle = self._spindle_of(cmd)
+        sign = -1.0 if spindle.speed < 0 else 1.0
+        spindle.speed = sign * abs(cmd.speed) if spindle.speed else 0.0
+        spindle.css_factor = math.copysign(cmd.factor, sign) if spindle.speed else 0.0
+        spindle.css_xoffset = cmd.xoffset
+        if spindle.speed:  # feed moves wait for the new speed (motion(9) at-speed)
+            self.tp.wait_for_spindle_at_speed()
+
+    @handler(emc.EMC_SPINDLE_INCREASE, emc.EMC_SPINDLE_DECREASE)
+    def _spindle_step(self, cmd: emc.EMC_SPINDLE_INCREASE | emc.EMC_SPINDLE_DECREASE) -> None:
+        """Faster or slower by ``speed`` (100 rpm if 0), never through zero."""
+        spindle = self._spindle_of(cmd)
+        step = abs(cmd.speed) or 100.0
+        spindle.increasing = 1
+        if isinstance(cmd, emc.EMC_SPINDLE_DECREASE):
+            step = -min(step, abs(spindle.speed))
+            spindle.increasing = -1
+        spindle.speed += step if spindle.speed >= 0 else -step
+
+    @handler(emc.EMC_SPINDLE_BRAKE_ENGAGE)
+    def _spindle_brake_engage(self, cmd: emc.EMC_SPINDLE_BRAKE_ENGAGE) -> None:
+        self._spindle_of(cmd).is_brake_on = True
+
+    @handler(emc.EMC_SPINDLE_BRAKE_RELEASE)
+    def _spindle_brake_release(self, cmd: emc.EMC_SPINDLE_BRAKE_RELEASE) -> None:
+        self._spindle_of(cmd).is_brake_on = False
+
+    @handler(emc.EMC_SPINDLE_ORIENT)
+    def _spindle_orient(self, cmd: emc.EMC_SPINDLE_ORIENT) -> None:
+        """M19: stop, then the drive turns to the angle and answers on is-oriented."""
+        spindle = self._spindle_of(cmd)
+        spindle.speed = spindle.css_factor = 0.0
+        spindle.is_brake_on = spindle.is_locked = False
+        spindle.is_orienting = True
+        spindle.orient_angle, spindle.orient_mode = cmd.orientation, cmd.mode
+        spindle.orient_state, spindle.orient_fault = OrientState.IN_PROGRESS, 0
+
+    @handler(emc.EMC_SPINDLE_WAIT_ORIENT_COMPLETE)
+    def _spindle_wait_orient(self, cmd: emc.EMC_SPINDLE_WAIT_ORIENT_COMPLETE) -> None:
+        """The moves after it wait; inpos stays false until it completes (task waits)."""
+        spindle = self._spindle_of(cmd)
+        if spindle.orient_state == OrientState.FAULTED:
+            raise Refused(f"spindle {cmd.spindle} orient fault {spindle.orient_fault}")
+        timeout = cmd.timeout if cmd.timeout > 0 else math.inf
+        if spindle.orient_state == OrientState.IN_PROGRESS:
+            self._orient_wait = (cmd.spindle, timeout)
+
+    @handler(
+        emc.EMC_TRAJ_SET_OFFSET,
+        emc.EMC_TRAJ_SET_FO_ENABLE,
+        emc.EMC_TRAJ_SET_SO_ENABLE,
+        emc.EMC_TRAJ_SET_FH_ENABLE,
+        emc.EMC_MOTION_ADAPTIVE,
+    )
+    def _settings(self, cmd: emc.NMLmsg) -> None:
         """Settings kept for status and later moves: tool offset, override enables."""
         if isinstance(cmd, emc.EMC_TRAJ_SET_OFFSET):
             self.tool_offset = _pose(cmd.offset)
@@ -886,27 +947,29 @@ class MotionController:
             self.is_feed_hold_enabled = bool(cmd.mode)
         elif isinstance(cmd, emc.EMC_TRAJ_SET_SO_ENABLE):
             if not 0 <= cmd.spindle < len(self.spindles):
-                return f"spindle {cmd.spindle} does not exist"
+                raise Refused(f"spindle {cmd.spindle} does not exist")
             self.spindles[cmd.spindle].is_override_enabled = bool(cmd.mode)
         elif isinstance(cmd, emc.EMC_MOTION_ADAPTIVE):
             self.is_adaptive_feed_enabled = bool(cmd.status)
-        return None
 
-    def _spindle_sync(self, cmd: emc.EMC_TRAJ_SET_SPINDLESYNC) -> str | None:
+    @handler(emc.EMC_TRAJ_SET_SPINDLESYNC)
+    def _spindle_sync(self, cmd: emc.EMC_TRAJ_SET_SPINDLESYNC) -> None:
         """G33, G76, G95: the moves queued next follow the spindle (MOT-062, MOT-065)."""
         if not 0 <= cmd.spindle < len(self.spindles):
-            return f"spindle {cmd.spindle} does not exist (num_spindles {len(self.spindles)})"
+            raise Refused(
+                f"spindle {cmd.spindle} does not exist (num_spindles {len(self.spindles)})"
+            )
         self.tp.set_spindle_sync(cmd.feed_per_revolution, bool(cmd.velocity_mode))
         if cmd.feed_per_revolution:
             self.sync_spindle = cmd.spindle
-        return None
 
-    def _rigid_tap(self, cmd: emc.EMC_TRAJ_RIGID_TAP) -> str | None:
+    @handler(emc.EMC_TRAJ_RIGID_TAP)
+    def _rigid_tap(self, cmd: emc.EMC_TRAJ_RIGID_TAP) -> None:
         """G33.1: in following the spindle, spindle reversed, out again (MOT-062)."""
         end = _pose(cmd.pos)
         problem = self._require_coord() or self._check_soft_limits(end, "Rigid tap move")
         if problem:
-            return problem
+            raise Refused(problem)
         self.tp.add_rigid_tap(
             list(end),
             cmd.ini_maxvel,
@@ -915,13 +978,14 @@ class MotionController:
             retract_scale=cmd.scale if cmd.scale > 0 else 1.0,
         )
         self._is_last_move_rapid = False
-        return None
 
-    def _spindle_scale(self, cmd: emc.EMC_TRAJ_SET_SPINDLE_SCALE) -> str | None:
+    @handler(emc.EMC_TRAJ_SET_SPINDLE_SCALE)
+    def _spindle_scale(self, cmd: emc.EMC_TRAJ_SET_SPINDLE_SCALE) -> None:
         if not 0 <= cmd.spindle < len(self.spindles):
-            return f"spindle {cmd.spindle} does not exist (num_spindles {len(self.spindles)})"
+            raise Refused(
+                f"spindle {cmd.spindle} does not exist (num_spindles {len(self.spindles)})"
+            )
         self.spindles[cmd.spindle].scale = cmd.scale
-        return None
 
     # ================================================================ servo period
     def update(self, inputs: Inputs) -> None:
@@ -1275,68 +1339,6 @@ def _finite_or_zero(value: float) -> float:
 _ZERO_POSE = (0.0,) * NUM_AXES
 
 
-_HANDLERS: dict[type, Callable[[MotionController, emc.NMLmsg], str | None]] = {
-    emc.EMC_TRAJ_ENABLE: MotionController._enable,
-    emc.EMC_TRAJ_DISABLE: MotionController._disable,
-    emc.EMC_TRAJ_ABORT: MotionController._abort,
-    emc.EMC_MOTION_ABORT: MotionController._abort,
-    emc.EMC_TRAJ_SET_MODE: MotionController._set_mode,
-    emc.EMC_TRAJ_SET_TELEOP_VECTOR: MotionController._teleop_vector,
-    emc.EMC_JOG_CONT: MotionController._jog,
-    emc.EMC_JOG_INCR: MotionController._jog,
-    emc.EMC_JOG_ABS: MotionController._jog,
-    emc.EMC_JOG_STOP: MotionController._jog,
-    emc.EMC_TRAJ_LINEAR_MOVE: MotionController._linear_move,
-    emc.EMC_TRAJ_CIRCULAR_MOVE: MotionController._circular_move,
-    emc.EMC_TRAJ_PROBE: MotionController._probe,
-    emc.EMC_TRAJ_CLEAR_PROBE_TRIPPED_FLAG: MotionController._clear_probe,
-    emc.EMC_TRAJ_SET_TERM_COND: MotionController._set_term_cond,
-    emc.EMC_TRAJ_SET_VELOCITY: MotionController._set_velocity,
-    emc.EMC_TRAJ_SET_ACCELERATION: MotionController._set_acceleration,
-    emc.EMC_TRAJ_SET_MAX_VELOCITY: MotionController._set_max_velocity,
-    emc.EMC_TRAJ_SET_MAX_ACCELERATION: MotionController._set_max_acceleration,
-    emc.EMC_TRAJ_SET_SCALE: MotionController._set_scale,
-    emc.EMC_TRAJ_SET_RAPID_SCALE: MotionController._set_rapid_scale,
-    emc.EMC_TRAJ_SET_MOTION_ID: MotionController._set_motion_id,
-    emc.EMC_TRAJ_PAUSE: MotionController._pause,
-    emc.EMC_TRAJ_RESUME: MotionController._resume,
-    emc.EMC_TRAJ_STEP: MotionController._step,
-    emc.EMC_JOINT_SET_MIN_POSITION_LIMIT: MotionController._joint_limits,
-    emc.EMC_JOINT_SET_MAX_POSITION_LIMIT: MotionController._joint_limits,
-    emc.EMC_JOINT_SET_MAX_VELOCITY: MotionController._joint_limits,
-    emc.EMC_JOINT_SET_FERROR: MotionController._joint_limits,
-    emc.EMC_JOINT_SET_MIN_FERROR: MotionController._joint_limits,
-    emc.EMC_JOINT_SET_BACKLASH: MotionController._joint_limits,
-    emc.EMC_JOINT_SET_MAX_ACCELERATION: MotionController._joint_limits,
-    emc.EMC_AXIS_SET_MIN_POSITION_LIMIT: MotionController._axis_settings,
-    emc.EMC_AXIS_SET_MAX_POSITION_LIMIT: MotionController._axis_settings,
-    emc.EMC_AXIS_SET_MAX_VELOCITY: MotionController._axis_settings,
-    emc.EMC_AXIS_SET_MAX_ACCELERATION: MotionController._axis_settings,
-    emc.EMC_JOINT_SET_HOMING_PARAMS: MotionController._homing_params,
-    emc.EMC_JOINT_SET_MOTOR_OFFSET: MotionController._motor_offset,
-    emc.EMC_JOINT_HOME: MotionController._home,
-    emc.EMC_JOINT_UNHOME: MotionController._unhome,
-    emc.EMC_JOINT_OVERRIDE_LIMITS: MotionController._override_limits,
-    emc.EMC_MOTION_SET_DOUT: MotionController._set_dout,
-    emc.EMC_MOTION_SET_AOUT: MotionController._set_aout,
-    emc.EMC_SPINDLE_ON: MotionController._spindle,
-    emc.EMC_SPINDLE_OFF: MotionController._spindle,
-    emc.EMC_SPINDLE_BRAKE_ENGAGE: MotionController._spindle,
-    emc.EMC_SPINDLE_BRAKE_RELEASE: MotionController._spindle,
-    emc.EMC_TRAJ_SET_SPINDLE_SCALE: MotionController._spindle_scale,
-    emc.EMC_SPINDLE_SPEED: MotionController._spindle,
-    emc.EMC_SPINDLE_INCREASE: MotionController._spindle,
-    emc.EMC_SPINDLE_DECREASE: MotionController._spindle,
-    emc.EMC_TRAJ_SET_SPINDLESYNC: MotionController._spindle_sync,
-    emc.EMC_TRAJ_RIGID_TAP: MotionController._rigid_tap,
-    emc.EMC_SPINDLE_ORIENT: MotionController._spindle,
-    emc.EMC_SPINDLE_WAIT_ORIENT_COMPLETE: MotionController._spindle,
-    emc.EMC_TRAJ_SET_OFFSET: MotionController._settings,
-    emc.EMC_TRAJ_SET_FO_ENABLE: MotionController._settings,
-    emc.EMC_TRAJ_SET_SO_ENABLE: MotionController._settings,
-    emc.EMC_TRAJ_SET_FH_ENABLE: MotionController._settings,
-    emc.EMC_MOTION_ADAPTIVE: MotionController._settings,
-}
 # What ends a program whose move motion refused: task's abort, or a fresh start (motion
 # turned off or on, another mode).
 _ENDS_A_REFUSED_PROGRAM = {

@@ -45,6 +45,10 @@ class Refused(Exception):  # noqa: N818  (a refusal is an answer, not an error)
         self.is_quiet = is_quiet
 
 
+class InternalError(Refused):
+    """The refusal of a command whose handler raised an exception nothing expected."""
+
+
 # What a handler returns for a command that goes on after the call (answered DONE later)
 RUNNING = "running"
 
@@ -134,10 +138,10 @@ def carry_out(
     return GOES_ON if result is RUNNING else DONE
 
 
-def internal_error(receiver: str, where: str, exc: BaseException) -> Refused:
+def internal_error(receiver: str, where: str, exc: BaseException) -> InternalError:
     """The refusal of an exception nothing expected (a bug, or a value nothing refused)."""
     log.error("%s: internal error %s", receiver, where, exc_info=exc)
-    return Refused(f"{receiver}: internal error {where}: {type(exc).__name__}: {exc}")
+    return InternalError(f"{receiver}: internal error {where}: {type(exc).__name__}: {exc}")
 
 
 def echo(stat: Any, cmd: NMLmsg, status: RCS_STATUS) -> None:
