@@ -10,22 +10,20 @@ trajectory planner and the kinematics, and follows LinuxCNC's position flow (MOT
     free:   per-joint planners -> joint pos_cmd -> forward kinematics -> carte_pos_cmd
     both:   motor_pos_cmd = pos_cmd + motor_offset;  pos_fb = motor_pos_fb - motor_offset
 
-Spindles (MOT-065): motion drives the ``spindle.N.*`` pins (speed, direction, CSS from
-the X position, M19 orientation) and reads their feedback each period; the planner gets
-the revolutions, speed and at-speed of the spindle synchronised moves follow (G33, G33.1,
-G95), and the index handshake (``spindle.N.index-enable``) starts a G33 chain. MPG wheels
-(``joint.N.jog-*``, ``axis.L.jog-*``) jog in free and teleop mode.
+Its parts, one concern each: ``motion/spindle.py`` (spindle commands, pins and feedback,
+MOT-065), ``motion/wheels.py`` (MPG wheels and the jog-stop inputs), ``motion/status.py``
+(EMC_MOTION_STAT filled every period), ``motion/teleop.py`` (the teleop planners) and
+``motion/modes.py`` (FREE, COORD, TELEOP).
 
-Commands are NML messages (``nml.emc``); ``handle(cmd)`` returns ``None`` when the command
-was carried out, or the reason it was refused (MOT-019: where LinuxCNC ignores a command
+Commands are NML messages (``nml.emc``), each carried out by the ``@handler`` method that
+names it (``nml/commands.py``); ``handle(cmd)`` returns ``None`` when the command was
+carried out, or the reason it was refused (MOT-019: where LinuxCNC ignores a command
 silently, we refuse it and say why). Faults found during a period (following error, hard
 limits, planner errors) are queued in ``errors`` for the caller to report.
 """
 
 from __future__ import annotations
 
-import contextlib
-import enum
 import itertools
 import math
 from collections.abc import Callable
@@ -37,19 +35,17 @@ from motion.free import FreePlanner, JogLimitError, check_finite
 from motion.homing import Homing, HomingConfig, HomingError
 from motion.joint import Joint
 from motion.kinematics import Kinematics, KinematicsError
+from motion.modes import COORD, FREE, TELEOP
 from motion.pose import AXIS_LETTERS, NUM_AXES, EmcPose
-from motion.status import MotionStatusRuns
+from motion.spindle import OrientState, Spindle, SpindleControl, SpindleInputs
+from motion.status import QUEUE_FULL_MARGIN, MotionStatusRuns, StatusFilling
 from motion.teleop import Fit, JointLimiter, JointLimits, TeleopPlanner
 from motion.tp import TermCond, TrajectoryPlanner
 from motion.tp.planner import ProbeType
+from motion.wheels import JogWheels, WheelInputs
 from nml import emc
 from nml.commands import Handlers, Refused, handler
 
-FREE, COORD, TELEOP = (
-    emc.EMC_TRAJ_MODE_ENUM.FREE,
-    emc.EMC_TRAJ_MODE_ENUM.COORD,
-    emc.EMC_TRAJ_MODE_ENUM.TELEOP,
-)
 _TERM_CONDS = {
     emc.EMC_TRAJ_TERM_COND.STOP: TermCond.STOP,
     emc.EMC_TRAJ_TERM_COND.EXACT: TermCond.EXACT,
@@ -57,80 +53,6 @@ _TERM_CONDS = {
 }
 DEFAULT_JOINT_VEL = 1.0
 DEFAULT_JOINT_ACC = 1.0
-AT_SPEED_SETTLE_PERIODS = 2  # see Spindle.settle_periods
-
-
-class OrientState(enum.IntEnum):
-    """EMC_SPINDLE_STAT.orient_state (LinuxCNC's EMCMOT_ORIENT_*)."""
-
-    NONE = 0
-    IN_PROGRESS = 1
-    COMPLETE = 2
-    FAULTED = 3
-
-
-# traj.queueFull is reported while fewer planner slots than this are free (like LinuxCNC's
-# TC_QUEUE_MARGIN), so moves task has already sent still fit (see task's MAX_MOTION_IN_FLIGHT)
-QUEUE_FULL_MARGIN = 200
-
-
-@dataclass
-class Spindle:
-    """One spindle as motion drives it (the ``spindle.N.*`` pins, MOT-065)."""
-
-    speed: float = 0.0  # signed rpm commanded (negative: reverse); in CSS the maximum
-    scale: float = 1.0
-    css_factor: float = 0.0  # G96: rpm = css_factor / radius (signed); 0: fixed speed
-    css_xoffset: float = 0.0  # machine X of the spindle axis (G5x + G92 + tool offsets)
-    increasing: int = 0  # 1 after EMC_SPINDLE_INCREASE, -1 after DECREASE
-    is_brake_on: bool = True
-    is_override_enabled: bool = True
-    # M19: the orient pins and the cycle's state
-    is_orienting: bool = False
-    orient_angle: float = 0.0
-    orient_mode: int = 0
-    is_locked: bool = False
-    orient_state: OrientState = OrientState.NONE
-    orient_fault: int = 0
-    # per period: speed output, index handshake and the feedback seen
-    speed_out: float = 0.0  # rpm to the drive, after CSS, override, inhibit, rigid tap
-    is_index_enabled: bool = False
-    is_at_speed: bool = True
-    is_inhibited: bool = False
-    # periods during which at-speed is taken as false after a speed change: the pin
-    # still tells about the old speed until the drive has seen the new one
-    settle_periods: int = 0
-
-    def stop_orienting(self) -> None:
-        """M3, M4, M5 end any orient cycle and unlock the spindle."""
-        self.is_orienting = self.is_locked = False
-        self.orient_state = OrientState.NONE
-        self.orient_fault = 0
-
-
-@dataclass
-class SpindleInputs:
-    """HAL inputs of one spindle for one period (``spindle.N.*``)."""
-
-    revs: float = 0.0  # encoder position in revolutions, reset to 0 at the index
-    speed_in: float = 0.0  # measured revolutions per second
-    is_at_speed: bool = True
-    index_enable: bool = False  # cleared by the encoder at the index
-    is_oriented: bool = False
-    orient_fault: int = 0
-    is_inhibited: bool = False
-    is_amp_fault: bool = False
-
-
-@dataclass
-class WheelInputs:
-    """An MPG wheel on ``joint.N.jog-*`` or ``axis.L.jog-*`` (motion(9))."""
-
-    counts: int = 0
-    is_enabled: bool = False
-    scale: float = 0.0  # machine units per count
-    is_vel_mode: bool = False
-    accel_fraction: float = 1.0
 
 
 @dataclass
@@ -166,7 +88,7 @@ class JogLease:
     periods_left: int = -1  # set by the first check of an unleased jog
 
 
-class MotionController:
+class MotionController(SpindleControl, JogWheels, StatusFilling):
     def __init__(
         self,
         kinematics: Kinematics,
@@ -302,12 +224,6 @@ class MotionController:
         """Abort from the safety board: as task's abort, every spindle stops too."""
         self._abort(None)
         self.stop_spindles()
-
-    def stop_spindles(self) -> None:
-        for spindle in self.spindles:
-            spindle.stop_orienting()
-            spindle.speed = spindle.css_factor = 0.0
-            spindle.is_brake_on = True
 
     def fault(self, message: str) -> None:
         """A fault (found during a period, or motmod's report of an internal error): say
@@ -849,87 +765,6 @@ class MotionController:
         else:
             self._pending_aouts.append((cmd.index, cmd.start))
 
-    def _spindle_of(self, cmd: emc.EMC_SPINDLE_CMD_MSG) -> Spindle:
-        """The spindle a command names; a new command ends a speed ramp (increasing) and
-        at-speed settles again (MOT-065; ``spindle.N.*`` pins)."""
-        if not 0 <= cmd.spindle < len(self.spindles):
-            raise Refused(
-                f"spindle {cmd.spindle} does not exist (num_spindles {len(self.spindles)})"
-            )
-        spindle = self.spindles[cmd.spindle]
-        spindle.increasing = 0
-        spindle.settle_periods = AT_SPEED_SETTLE_PERIODS
-        return spindle
-
-    @handler(emc.EMC_SPINDLE_ON)
-    def _spindle_on(self, cmd: emc.EMC_SPINDLE_ON) -> None:
-        """M3/M4 (G96: the CSS factor)."""
-        spindle = self._spindle_of(cmd)
-        spindle.stop_orienting()
-        spindle.speed = cmd.speed
-        spindle.css_factor, spindle.css_xoffset = cmd.factor, cmd.xoffset
-        spindle.is_brake_on = False
-        if cmd.wait_for_spindle_at_speed:
-            self.tp.wait_for_spindle_at_speed()
-
-    @handler(emc.EMC_SPINDLE_OFF)
-    def _spindle_off(self, cmd: emc.EMC_SPINDLE_OFF) -> None:
-        """M5."""
-        spindle = self._spindle_of(cmd)
-        spindle.stop_orienting()
-        spindle.speed = spindle.css_factor = 0.0
-        spindle.is_brake_on = True
-
-    @handler(emc.EMC_SPINDLE_SPEED)
-    def _spindle_speed(self, cmd: emc.EMC_SPINDLE_SPEED) -> None:
-        """S: a new speed in the direction it turns (none while stopped)."""
-        spindle = self._spindle_of(cmd)
-        sign = -1.0 if spindle.speed < 0 else 1.0
-        spindle.speed = sign * abs(cmd.speed) if spindle.speed else 0.0
-        spindle.css_factor = math.copysign(cmd.factor, sign) if spindle.speed else 0.0
-        spindle.css_xoffset = cmd.xoffset
-        if spindle.speed:  # feed moves wait for the new speed (motion(9) at-speed)
-            self.tp.wait_for_spindle_at_speed()
-
-    @handler(emc.EMC_SPINDLE_INCREASE, emc.EMC_SPINDLE_DECREASE)
-    def _spindle_step(self, cmd: emc.EMC_SPINDLE_INCREASE | emc.EMC_SPINDLE_DECREASE) -> None:
-        """Faster or slower by ``speed`` (100 rpm if 0), never through zero."""
-        spindle = self._spindle_of(cmd)
-        step = abs(cmd.speed) or 100.0
-        spindle.increasing = 1
-        if isinstance(cmd, emc.EMC_SPINDLE_DECREASE):
-            step = -min(step, abs(spindle.speed))
-            spindle.increasing = -1
-        spindle.speed += step if spindle.speed >= 0 else -step
-
-    @handler(emc.EMC_SPINDLE_BRAKE_ENGAGE)
-    def _spindle_brake_engage(self, cmd: emc.EMC_SPINDLE_BRAKE_ENGAGE) -> None:
-        self._spindle_of(cmd).is_brake_on = True
-
-    @handler(emc.EMC_SPINDLE_BRAKE_RELEASE)
-    def _spindle_brake_release(self, cmd: emc.EMC_SPINDLE_BRAKE_RELEASE) -> None:
-        self._spindle_of(cmd).is_brake_on = False
-
-    @handler(emc.EMC_SPINDLE_ORIENT)
-    def _spindle_orient(self, cmd: emc.EMC_SPINDLE_ORIENT) -> None:
-        """M19: stop, then the drive turns to the angle and answers on is-oriented."""
-        spindle = self._spindle_of(cmd)
-        spindle.speed = spindle.css_factor = 0.0
-        spindle.is_brake_on = spindle.is_locked = False
-        spindle.is_orienting = True
-        spindle.orient_angle, spindle.orient_mode = cmd.orientation, cmd.mode
-        spindle.orient_state, spindle.orient_fault = OrientState.IN_PROGRESS, 0
-
-    @handler(emc.EMC_SPINDLE_WAIT_ORIENT_COMPLETE)
-    def _spindle_wait_orient(self, cmd: emc.EMC_SPINDLE_WAIT_ORIENT_COMPLETE) -> None:
-        """The moves after it wait; inpos stays false until it completes (task waits)."""
-        spindle = self._spindle_of(cmd)
-        if spindle.orient_state == OrientState.FAULTED:
-            raise Refused(f"spindle {cmd.spindle} orient fault {spindle.orient_fault}")
-        timeout = cmd.timeout if cmd.timeout > 0 else math.inf
-        if spindle.orient_state == OrientState.IN_PROGRESS:
-            self._orient_wait = (cmd.spindle, timeout)
-
     @handler(
         emc.EMC_TRAJ_SET_OFFSET,
         emc.EMC_TRAJ_SET_FO_ENABLE,
@@ -952,17 +787,6 @@ class MotionController:
         elif isinstance(cmd, emc.EMC_MOTION_ADAPTIVE):
             self.is_adaptive_feed_enabled = bool(cmd.status)
 
-    @handler(emc.EMC_TRAJ_SET_SPINDLESYNC)
-    def _spindle_sync(self, cmd: emc.EMC_TRAJ_SET_SPINDLESYNC) -> None:
-        """G33, G76, G95: the moves queued next follow the spindle (MOT-062, MOT-065)."""
-        if not 0 <= cmd.spindle < len(self.spindles):
-            raise Refused(
-                f"spindle {cmd.spindle} does not exist (num_spindles {len(self.spindles)})"
-            )
-        self.tp.set_spindle_sync(cmd.feed_per_revolution, bool(cmd.velocity_mode))
-        if cmd.feed_per_revolution:
-            self.sync_spindle = cmd.spindle
-
     @handler(emc.EMC_TRAJ_RIGID_TAP)
     def _rigid_tap(self, cmd: emc.EMC_TRAJ_RIGID_TAP) -> None:
         """G33.1: in following the spindle, spindle reversed, out again (MOT-062)."""
@@ -978,14 +802,6 @@ class MotionController:
             retract_scale=cmd.scale if cmd.scale > 0 else 1.0,
         )
         self._is_last_move_rapid = False
-
-    @handler(emc.EMC_TRAJ_SET_SPINDLE_SCALE)
-    def _spindle_scale(self, cmd: emc.EMC_TRAJ_SET_SPINDLE_SCALE) -> None:
-        if not 0 <= cmd.spindle < len(self.spindles):
-            raise Refused(
-                f"spindle {cmd.spindle} does not exist (num_spindles {len(self.spindles)})"
-            )
-        self.spindles[cmd.spindle].scale = cmd.scale
 
     # ================================================================ servo period
     def update(self, inputs: Inputs) -> None:
@@ -1031,139 +847,7 @@ class MotionController:
         self._drive_spindles()
 
     # ---------------------------------------------------------------- jog wheels
-    def _jog_wheels(self, inputs: Inputs) -> None:
-        """MPG wheels: each count moves the joint (free mode) or the axis (teleop mode) by
-        jog-scale within its limits; counts that arrive while a wheel cannot jog are
-        dropped, as LinuxCNC does (motion(9) jog pins)."""
-        self.is_jog_inhibited = inputs.is_jog_inhibited
-        self._stop_jogs_on_request(inputs.is_jog_stop, inputs.is_jog_stop_immediate)
-        can_jog = self.is_enabled and not self.homing.is_homing and not self.is_jog_inhibited
-        for index, wheel in enumerate(inputs.joint_wheels):
-            delta = self._wheel_delta(("joint", index), wheel)
-            if delta and can_jog and self.mode == FREE:
-                joint = self.joints[index]
-                override = self.is_override_limits or not joint.is_homed
-                self._wheel_jog(joint.planner, delta * wheel.scale, wheel, override)
-        for index, wheel in inputs.axis_wheels.items():
-            delta = self._wheel_delta(("axis", index), wheel)
-            if delta and can_jog and self.mode == TELEOP:
-                planner = self.axis_planners[index]
-                self._wheel_jog(planner, delta * wheel.scale, wheel, self.is_override_limits)
-
-    def _stop_jogs_on_request(self, is_stop: bool, is_stop_immediate: bool) -> None:
-        """motion.jog-stop / jog-stop-immediate: a rising edge stops the jogs running,
-        braking or at once."""
-        was_stop, was_stop_immediate = self._jog_stops
-        self._jog_stops = (is_stop, is_stop_immediate)
-        if self.homing.is_homing or self.mode == COORD:
-            return
-        is_stop_now = is_stop_immediate and not was_stop_immediate
-        is_stop_braking = is_stop and not was_stop
-        if self.mode == TELEOP:  # the teleop vector stops too (a cartesian jog)
-            if is_stop_now:
-                self._reset_teleop()
-            elif is_stop_braking:
-                self._stop_teleop()
-            return
-        planners = [j.planner for j in self.joints]
-        if is_stop_now:
-            for planner in planners:
-                planner.reset(planner.pos)
-        elif is_stop_braking:
-            for planner in planners:
-                planner.stop()
-
-    @property
-    def is_jogging(self) -> bool:
-        """motion.jog-is-active: a joint (free mode) or an axis (teleop mode) jogs."""
-        if self.mode == FREE and not self.homing.is_homing:
-            return any(j.planner.is_active for j in self.joints)
-        return self.mode == TELEOP and self._is_teleop_moving()
-
-    def _wheel_delta(self, key: tuple[str, int], wheel: WheelInputs) -> int:
-        last = self._wheel_counts.get(key, wheel.counts)
-        self._wheel_counts[key] = wheel.counts
-        return wheel.counts - last if wheel.is_enabled else 0
-
-    @staticmethod
-    def _wheel_jog(planner: FreePlanner, offset: float, wheel: WheelInputs, override: bool) -> None:
-        # at a limit, or a bad scale: the wheel does nothing, as in LinuxCNC
-        with contextlib.suppress(JogLimitError, ValueError):
-            planner.jog_wheel(offset, wheel.accel_fraction, wheel.is_vel_mode, override)
-
     # ---------------------------------------------------------------- spindle, per period
-    def _read_spindles(self, inputs: list[SpindleInputs]) -> None:
-        """Spindle feedback: orient cycle, index handshake, the planner's spindle inputs."""
-        for index, (spindle, pins) in enumerate(zip(self.spindles, inputs, strict=False)):
-            spindle.is_at_speed = pins.is_at_speed and not spindle.settle_periods
-            spindle.settle_periods = max(spindle.settle_periods - 1, 0)
-            spindle.is_inhibited = pins.is_inhibited
-            if pins.is_amp_fault and self.is_enabled:
-                self.fault(f"spindle {index} amplifier fault")
-            if spindle.is_orienting:
-                if pins.orient_fault:
-                    spindle.is_orienting = False
-                    spindle.orient_state = OrientState.FAULTED
-                    spindle.orient_fault = pins.orient_fault
-                    self.errors.append(f"spindle {index} orient fault {pins.orient_fault}")
-                elif pins.is_oriented:  # done: the spindle is held at the angle
-                    spindle.is_orienting = False
-                    spindle.is_locked = spindle.is_brake_on = True
-                    spindle.orient_state = OrientState.COMPLETE
-        self._check_orient_wait()
-        tp = self.tp
-        tp.is_start_held = self._orient_wait is not None
-        if not inputs:
-            return
-        sync = self.spindles[self.sync_spindle]
-        pins = inputs[self.sync_spindle]
-        if not tp.is_waiting_for_index:
-            sync.is_index_enabled = False  # (also when an abort ended the wait)
-        elif sync.is_index_enabled and not pins.index_enable:  # the encoder saw the index
-            sync.is_index_enabled = False
-            tp.index_found()
-        else:
-            sync.is_index_enabled = True
-        # revolutions counted in the programmed direction (a rigid tap's reversal excluded)
-        direction = -1.0 if sync.speed < 0 else 1.0
-        tp.spindle_revs = pins.revs * direction
-        tp.spindle_rps = abs(pins.speed_in)
-        tp.is_spindle_at_speed = all(
-            s.is_at_speed for s in self.spindles if s.speed or s.css_factor
-        )
-
-    def _check_orient_wait(self) -> None:
-        """EMC_SPINDLE_WAIT_ORIENT_COMPLETE: done, faulted (run aborted) or timed out."""
-        if self._orient_wait is None:
-            return
-        index, seconds_left = self._orient_wait
-        state = self.spindles[index].orient_state
-        if state == OrientState.IN_PROGRESS and seconds_left > 0:
-            self._orient_wait = (index, seconds_left - self.period_s)
-            return
-        self._orient_wait = None
-        if state == OrientState.IN_PROGRESS:
-            self.errors.append(f"spindle {index} orient timed out")
-        if state != OrientState.COMPLETE:
-            self.tp.abort()
-
-    def _drive_spindles(self) -> None:
-        """The speed each spindle is told: fixed or from the radius (G96 CSS), times the
-        override, reversed by a rigid tap, 0 while inhibited or orienting."""
-        x = self.carte_pos_cmd.x
-        for index, spindle in enumerate(self.spindles):
-            rpm = spindle.speed
-            if spindle.css_factor:
-                radius = abs(x - spindle.css_xoffset)
-                css_rpm = abs(spindle.css_factor) / radius if radius > 0 else math.inf
-                rpm = math.copysign(min(css_rpm, abs(spindle.speed)), spindle.css_factor)
-            rpm *= spindle.scale
-            if index == self.sync_spindle:
-                rpm *= self.tp.spindle_reversal
-            if spindle.is_orienting or spindle.is_inhibited:
-                rpm = 0.0
-            spindle.speed_out = rpm
-
     def _set_joints_from_pose(self, pose: EmcPose) -> None:
         try:
             targets = self.kins.inverse(pose)
@@ -1226,117 +910,11 @@ class MotionController:
             return xyz or math.hypot(*speeds[3:])
         return 0.0
 
-    def fill_status(self, stat: emc.EMC_MOTION_STAT) -> None:
-        """Write the controller's state into an EMC_MOTION_STAT (MOT-066..071), in place
-        and in a few assignments (motion/status.py): motmod calls this every period."""
-        runs = self._status_runs
-        if runs is None or runs.stat is not stat:
-            runs = self._status_runs = MotionStatusRuns(stat, len(self.joints), len(self.spindles))
-        tp = self.tp
-        is_coord = self.mode == COORD
-        is_enabled = self.is_enabled
-        move = tp.current_move if is_coord else None
-        runs.traj_state.write(
-            self.period_s,  # cycleTime
-            len(self.joints),
-            len(self.spindles),
-            getattr(self.kins, "axis_mask", 0b111),
-            self.mode,
-            is_enabled,
-            self.is_in_position,  # inpos
-            tp.queue_depth,  # queue
-            tp.active_queue if is_coord else 0,  # activeQueue
-            tp.free_slots < QUEUE_FULL_MARGIN,  # queueFull
-            tp.motion_id,  # id
-            tp.is_paused,
-            tp.feed_scale,  # scale
-            tp.rapid_scale,
-            *self.carte_pos_cmd.as_tuple(),  # position
-            *self.carte_pos_fb.as_tuple(),  # actualPosition
-            self.traj_vel,  # velocity
-            self.traj_acc,  # acceleration
-            _finite_or_zero(self.max_vel),  # maxVelocity
-            _finite_or_zero(self.max_acc),  # maxAcceleration
-            *tp.probe_pos.tolist(),  # probedPosition
-            tp.probe_tripped,
-            move is not None and move.probe is not None,  # probing
-        )
-        runs.traj_path.write(
-            int(self.kins.kinematics_type()),
-            _motion_type(move),
-            tp.distance_to_go if is_coord else 0.0,
-            *(tp.dtg.tolist() if is_coord else _ZERO_POSE),  # dtg
-            self.current_vel,
-            self.is_feed_override_enabled,
-            self.is_adaptive_feed_enabled,
-            self.is_feed_hold_enabled,
-        )
-        is_override_limits = self.is_override_limits
-        for joint, fault, out, switches in zip(
-            self.joints, self.is_faulted, runs.joints, runs.joint_switches, strict=True
-        ):
-            out.write(
-                joint.backlash,
-                _finite_or_zero(joint.min_limit),  # minPositionLimit
-                _finite_or_zero(joint.max_limit),  # maxPositionLimit
-                _finite_or_zero(joint.ferror_limit),  # maxFerror
-                _finite_or_zero(joint.min_ferror_limit),  # minFerror
-                joint.ferror,  # ferrorCurrent
-                joint.ferror_high_mark,
-                joint.pos_cmd,  # output
-                joint.pos_fb,  # input
-                joint.vel_cmd,  # velocity
-                not joint.planner.is_active,  # inpos
-                bool(joint.is_homing),  # (bool: set by the homing module, maybe a user's)
-                bool(joint.is_homed),
-                fault,
-                is_enabled,
-            )
-            switches.write(joint.is_on_neg_limit, joint.is_on_pos_limit, is_override_limits)
-        for spindle, out in zip(self.spindles, runs.spindles, strict=True):
-            speed = spindle.speed
-            is_on = speed != 0
-            out.write(
-                is_on,  # state
-                speed,
-                spindle.scale,  # spindle_scale
-                abs(speed) if spindle.css_factor else 0.0,  # css_maximum
-                spindle.css_factor,
-                (speed > 0) - (speed < 0),  # direction
-                spindle.is_brake_on,  # brake
-                spindle.increasing,
-                is_on,  # enabled
-                spindle.orient_state,
-                spindle.orient_fault,
-                spindle.is_override_enabled,
-                False,  # homed: spindles are not homed (LinuxCNC reports the same)
-            )
-        runs.write_io(self.digital_out, self.digital_in, self.analog_out, self.analog_in)
-
-
-def _motion_type(move) -> int:
-    """EMC_TRAJ_STAT.motion_type of the move being executed (0: none)."""
-    if move is None:
-        return 0
-    if move.probe is not None:
-        return emc.EMC_MOTION_TYPE.PROBING
-    if move.is_rapid:
-        return emc.EMC_MOTION_TYPE.TRAVERSE
-    is_straight = move.line is not None or move.rigid_tap is not None
-    return emc.EMC_MOTION_TYPE.FEED if is_straight else emc.EMC_MOTION_TYPE.ARC
-
 
 def _pose(pose: emc.EmcPose) -> EmcPose:
     # all nine values in one unpack (tran's X Y Z, then A B C U V W): nine field reads
     # through the message's views cost 3x more, and every queued move pays it
     return EmcPose(*pose.to_flat())
-
-
-def _finite_or_zero(value: float) -> float:
-    return value if math.isfinite(value) else 0.0
-
-
-_ZERO_POSE = (0.0,) * NUM_AXES
 
 
 # What ends a program whose move motion refused: task's abort, or a fresh start (motion
@@ -1349,4 +927,17 @@ _ENDS_A_REFUSED_PROGRAM = {
     emc.EMC_TRAJ_SET_MODE,
 }
 
-__all__ = ["Inputs", "Joint", "MotionController"]
+# (the parts' names, for the modules that take them from here)
+__all__ = [
+    "COORD",
+    "FREE",
+    "QUEUE_FULL_MARGIN",
+    "TELEOP",
+    "Inputs",
+    "Joint",
+    "MotionController",
+    "OrientState",
+    "Spindle",
+    "SpindleInputs",
+    "WheelInputs",
+]
