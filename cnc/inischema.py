@@ -36,12 +36,12 @@ from pathlib import Path
 from typing import Any
 
 from cnc.ini import IniError, IniFile, IniValue, parse_bool, parse_float, parse_int
+from nml.axes import AXIS_LETTERS
 
 # Sizes of LinuxCNC's motion controller (nml.emc holds the same numbers, checked by a test;
 # importing the message catalogue here would cost every process 0.3 s at start-up).
 MAX_JOINTS = 16  # EMCMOT_MAX_JOINTS
 MAX_SPINDLES = 8  # EMCMOT_MAX_SPINDLES
-AXIS_LETTERS = "XYZABCUVW"
 MAX_MDI_COMMANDS = 64  # LinuxCNC's limit on [HALUI]MDI_COMMAND lines
 MDI_COMMAND_BYTES = 254  # what an EMC_TASK_PLAN_EXECUTE holds (LINELEN - 1; cnc.api's TEXT_LIMIT)
 HUGE = 1e99  # LinuxCNC's "no limit" for positions, velocities and accelerations

@@ -24,8 +24,6 @@ from __future__ import annotations
 import signal
 import sys
 import time
-import traceback
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -39,6 +37,7 @@ from iocontrol.tooldata import ToolDataWriter
 from iocontrol.tooltable import AXES, ToolEntry, ToolTable, ToolTableError
 from nml import emc
 from nml.channels import EMC_ERROR, TOOL_COMMAND, TOOL_STATUS, Nml, load_config
+from nml.commands import Handlers, Refused, carry_out, handler
 from nml.errors import NmlError, NmlFormatError
 from nml.ipcnames import ipc_name
 from nml.message import RCS_STATUS, NMLmsg
@@ -94,10 +93,6 @@ SAFE_OUTPUTS = {
         "tool-change",
     )
 }
-
-
-class CommandError(Exception):
-    """A command iocontrol refuses; the text is for the operator."""
 
 
 def pose_to_list(pose: emc.EmcPose) -> list[float]:
@@ -163,7 +158,7 @@ class IoControl:
         self.safety: SafetyLink | None = None
         self.braking_estop_at = 0.0  # a braking E-stop: the chain opens when motion stopped
         self._published_at = 0.0
-        self._handlers = self._command_handlers()
+        self._handlers = Handlers(self)  # the @handler methods below
 
     # ------------------------------------------------------------------ set-up
     def open(self) -> None:
@@ -375,19 +370,11 @@ class IoControl:
         self.command_type = msg.TYPE
         self.echo_serial = getattr(msg, "serial_number", 0)
         self.has_command_failed = False
-        handler = self._handlers.get(type(msg))
-        try:
-            if handler is None:
-                raise CommandError(f"iocontrol cannot execute {msg.NAME} (type {msg.TYPE})")
-            handler(msg)
-        except (CommandError, ToolChangeError) as exc:
+        answer = carry_out("iocontrol", self._carry_out, msg, expected=(ToolChangeError,))
+        if answer.status == RCS_STATUS.ERROR:  # (a bug too: logged, iocontrol goes on)
             self.has_command_failed = True
-            self.report_error(str(exc))
-        except Exception as exc:  # a bug: this command fails, iocontrol goes on
-            self.has_command_failed = True
-            traceback.print_exc()
-            kind = type(exc).__name__
-            self.report_error(f"internal error in {msg.NAME}: {kind}: {exc}")
+            if answer.reason:
+                self.report_error(answer.reason)
         if isinstance(msg, emc.EMC_TOOL_CMD_MSG):
             self._commit_table()
         self._write_outputs()  # now, so a HAL loopback answers before the next update
@@ -400,34 +387,43 @@ class IoControl:
         if self.tool_data is not None:
             self.tool_data.publish(self.changer.table)
 
-    def _command_handlers(self) -> dict[type, Callable[[Any], None]]:
-        return {
-            emc.EMC_IO_INIT: self._io_init,
-            emc.EMC_IO_HALT: self._halt,
-            emc.EMC_IO_ABORT: self._abort,
-            emc.EMC_IO_SET_CYCLE_TIME: self._set_cycle_time,
-            emc.EMC_SET_DEBUG: self._set_debug,
-            emc.EMC_TOOL_INIT: self._tool_init,
-            emc.EMC_TOOL_HALT: self._halt,
-            emc.EMC_TOOL_ABORT: self._abort,
-            emc.EMC_TOOL_PREPARE: lambda msg: self.changer.prepare(msg.tool),
-            emc.EMC_TOOL_LOAD: lambda msg: self.changer.start_change(),
-            emc.EMC_TOOL_UNLOAD: lambda msg: self.changer.unload(),
-            emc.EMC_TOOL_LOAD_TOOL_TABLE: self._load_tool_table,
-            emc.EMC_TOOL_SET_OFFSET: self._set_offset,
-            emc.EMC_TOOL_SET_NUMBER: lambda msg: self.changer.set_number(msg.tool),
-            emc.EMC_TOOL_START_CHANGE: lambda msg: None,  # nothing to do before M6's move
-            emc.EMC_AUX_ESTOP_ON: self._estop_on,
-            emc.EMC_AUX_ESTOP_OFF: self._estop_off,
-            emc.EMC_AUX_ESTOP_RESET: self._estop_reset,
-            emc.EMC_COOLANT_MIST_ON: lambda msg: setattr(self, "is_mist", True),
-            emc.EMC_COOLANT_MIST_OFF: lambda msg: setattr(self, "is_mist", False),
-            emc.EMC_COOLANT_FLOOD_ON: lambda msg: setattr(self, "is_flood", True),
-            emc.EMC_COOLANT_FLOOD_OFF: lambda msg: setattr(self, "is_flood", False),
-            emc.EMC_LUBE_ON: lambda msg: setattr(self, "is_lube", True),
-            emc.EMC_LUBE_OFF: lambda msg: setattr(self, "is_lube", False),
-            emc.EMC_IO_PLUGIN_CALL: self._plugin_call,
-        }
+    def _carry_out(self, msg: NMLmsg) -> None:
+        function = self._handlers.get(type(msg))
+        if function is None:
+            raise Refused(f"iocontrol cannot execute {msg.NAME} (type {msg.TYPE})")
+        function(msg)
+
+    @handler(emc.EMC_TOOL_PREPARE)
+    def _prepare(self, msg: emc.EMC_TOOL_PREPARE) -> None:
+        self.changer.prepare(msg.tool)
+
+    @handler(emc.EMC_TOOL_LOAD)
+    def _load(self, msg: emc.EMC_TOOL_LOAD) -> None:
+        self.changer.start_change()
+
+    @handler(emc.EMC_TOOL_UNLOAD)
+    def _unload(self, msg: emc.EMC_TOOL_UNLOAD) -> None:
+        self.changer.unload()
+
+    @handler(emc.EMC_TOOL_SET_NUMBER)
+    def _set_number(self, msg: emc.EMC_TOOL_SET_NUMBER) -> None:
+        self.changer.set_number(msg.tool)
+
+    @handler(emc.EMC_TOOL_START_CHANGE)
+    def _start_change(self, msg: emc.EMC_TOOL_START_CHANGE) -> None:
+        """Nothing to do before M6's move."""
+
+    @handler(emc.EMC_COOLANT_MIST_ON, emc.EMC_COOLANT_MIST_OFF)
+    def _mist(self, msg: NMLmsg) -> None:
+        self.is_mist = isinstance(msg, emc.EMC_COOLANT_MIST_ON)
+
+    @handler(emc.EMC_COOLANT_FLOOD_ON, emc.EMC_COOLANT_FLOOD_OFF)
+    def _flood(self, msg: NMLmsg) -> None:
+        self.is_flood = isinstance(msg, emc.EMC_COOLANT_FLOOD_ON)
+
+    @handler(emc.EMC_LUBE_ON, emc.EMC_LUBE_OFF)
+    def _lube(self, msg: NMLmsg) -> None:
+        self.is_lube = isinstance(msg, emc.EMC_LUBE_ON)
 
     def _reset_outputs(self) -> None:
         """Every HAL output to its safe value (LinuxCNC's hal_init_pins)."""
@@ -436,30 +432,37 @@ class IoControl:
         self.is_flood = self.is_mist = self.is_lube = False
         self.changer.reset_outputs()
 
+    @handler(emc.EMC_IO_INIT)
     def _io_init(self, msg: emc.EMC_IO_INIT) -> None:
         self._reset_outputs()
 
+    @handler(emc.EMC_IO_HALT, emc.EMC_TOOL_HALT)
     def _halt(self, msg: NMLmsg) -> None:
         self.changer.cancel()
 
+    @handler(emc.EMC_IO_ABORT, emc.EMC_TOOL_ABORT)
     def _abort(self, msg: NMLmsg) -> None:
         """Task aborts: coolant off, any handshake dropped (IO-013)."""
         self.abort_reason = getattr(msg, "reason", 0)
         self.is_flood = self.is_mist = False
         self.changer.cancel()
 
+    @handler(emc.EMC_IO_SET_CYCLE_TIME)
     def _set_cycle_time(self, msg: emc.EMC_IO_SET_CYCLE_TIME) -> None:
         if not msg.cycleTime > 0:
-            raise CommandError(f"cycle time {msg.cycleTime} must be positive")
+            raise Refused(f"cycle time {msg.cycleTime} must be positive")
         self.cycle_time = msg.cycleTime
 
+    @handler(emc.EMC_SET_DEBUG)
     def _set_debug(self, msg: emc.EMC_SET_DEBUG) -> None:
         self.debug = msg.debug
 
+    @handler(emc.EMC_AUX_ESTOP_ON)
     def _estop_on(self, msg: emc.EMC_AUX_ESTOP_ON) -> None:
         """Assert e-stop to the outside world: user-enable-out false, outputs safe (IO-016)."""
         self._reset_outputs()
 
+    @handler(emc.EMC_AUX_ESTOP_OFF)
     def _estop_off(self, msg: emc.EMC_AUX_ESTOP_OFF) -> None:
         """Allow enabling: user-enable-out true and a one-cycle user-request-enable pulse,
         the rising edge that resets an external e-stop latch (IO-016). An E-stop chain
@@ -474,6 +477,7 @@ class IoControl:
                 break
             time.sleep(0.001)
 
+    @handler(emc.EMC_AUX_ESTOP_RESET)
     def _estop_reset(self, msg: emc.EMC_AUX_ESTOP_RESET) -> None:
         """A further reset request for the external latch; LinuxCNC 2.9 ignores it."""
         if self.is_user_enabled:
@@ -483,12 +487,14 @@ class IoControl:
         self.is_request_enable = True
         self.request_enable_until = time.monotonic() + self.cycle_time
 
+    @handler(emc.EMC_TOOL_INIT)
     def _tool_init(self, msg: emc.EMC_TOOL_INIT) -> None:
         self._reload_table(self.table_path)
 
+    @handler(emc.EMC_TOOL_LOAD_TOOL_TABLE)
     def _load_tool_table(self, msg: emc.EMC_TOOL_LOAD_TOOL_TABLE) -> None:
         if "\0" in msg.file:  # (no file can have that name: the OS refuses it)
-            raise CommandError(f"tool table file name {msg.file!r} holds a NUL character")
+            raise Refused(f"tool table file name {msg.file!r} holds a NUL character")
         path = Path(msg.file) if msg.file else self.table_path
         self._reload_table(path)
 
@@ -499,13 +505,13 @@ class IoControl:
             table = load_tool_table(path, self.changer.is_random)
         except ToolTableError as exc:
             self.is_save_blocked = self.is_save_blocked or path == self.table_path
-            raise CommandError(f"{exc}; tool table not reloaded") from None
+            raise Refused(f"{exc}; tool table not reloaded") from None
         except OSError as exc:
-            raise CommandError(f"cannot read tool table {path}: {exc.strerror}") from None
+            raise Refused(f"cannot read tool table {path}: {exc.strerror}") from None
         if table.has_unreadable_lines:  # the table in use stays rather than lose tools
             self.is_save_blocked = self.is_save_blocked or path == self.table_path
             skipped = "; ".join(str(w) for w in table.warnings if "skipped" in str(w))
-            raise CommandError(f"{skipped}; tool table not reloaded")
+            raise Refused(f"{skipped}; tool table not reloaded")
         self.changer.replace_table(table)
         # like LinuxCNC, a reload is not written back; the next change saves the table
         self._saved_text = table.format()
@@ -514,6 +520,7 @@ class IoControl:
         for warning in table.warnings:
             self.report_error(f"warning: {warning}")
 
+    @handler(emc.EMC_TOOL_SET_OFFSET)
     def _set_offset(self, msg: emc.EMC_TOOL_SET_OFFSET) -> None:
         self.changer.set_offset(
             msg.pocket,
@@ -525,8 +532,9 @@ class IoControl:
             msg.orientation,
         )
 
+    @handler(emc.EMC_IO_PLUGIN_CALL)
     def _plugin_call(self, msg: emc.EMC_IO_PLUGIN_CALL) -> None:
-        raise CommandError("iocontrol has no Python plugin (EMC_IO_PLUGIN_CALL, IO-020)")
+        raise Refused("iocontrol has no Python plugin (EMC_IO_PLUGIN_CALL, IO-020)")
 
     # ------------------------------------------------------------------ tool table file
     def save_table_if_changed(self) -> bool:

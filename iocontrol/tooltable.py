@@ -29,9 +29,10 @@ import os
 import re
 
 from cnc.atomicfile import atomic_write_text
+from nml.axes import AXIS_LETTERS
 
 CANON_POCKETS_MAX = 1001  # TOOL-009: pockets 0..1000, index 0 is the spindle
-AXES = "XYZABCUVW"
+AXES = AXIS_LETTERS  # the offsets' letters, in EmcPose order
 
 
 class ToolTableError(ValueError):

@@ -10,22 +10,20 @@ trajectory planner and the kinematics, and follows LinuxCNC's position flow (MOT
     free:   per-joint planners -> joint pos_cmd -> forward kinematics -> carte_pos_cmd
     both:   motor_pos_cmd = pos_cmd + motor_offset;  pos_fb = motor_pos_fb - motor_offset
 
-Spindles (MOT-065): motion drives the ``spindle.N.*`` pins (speed, direction, CSS from
-the X position, M19 orientation) and reads their feedback each period; the planner gets
-the revolutions, speed and at-speed of the spindle synchronised moves follow (G33, G33.1,
-G95), and the index handshake (``spindle.N.index-enable``) starts a G33 chain. MPG wheels
-(``joint.N.jog-*``, ``axis.L.jog-*``) jog in free and teleop mode.
+Its parts, one concern each: ``motion/spindle.py`` (spindle commands, pins and feedback,
+MOT-065), ``motion/wheels.py`` (MPG wheels and the jog-stop inputs), ``motion/status.py``
+(EMC_MOTION_STAT filled every period), ``motion/teleop.py`` (the teleop planners) and
+``motion/modes.py`` (FREE, COORD, TELEOP).
 
-Commands are NML messages (``nml.emc``); ``handle(cmd)`` returns ``None`` when the command
-was carried out, or the reason it was refused (MOT-019: where LinuxCNC ignores a command
+Commands are NML messages (``nml.emc``), each carried out by the ``@handler`` method that
+names it (``nml/commands.py``); ``handle(cmd)`` returns ``None`` when the command was
+carried out, or the reason it was refused (MOT-019: where LinuxCNC ignores a command
 silently, we refuse it and say why). Faults found during a period (following error, hard
 limits, planner errors) are queued in ``errors`` for the caller to report.
 """
 
 from __future__ import annotations
 
-import contextlib
-import enum
 import itertools
 import math
 from collections.abc import Callable
@@ -40,18 +38,17 @@ from motion.homing import Homing, HomingConfig, HomingError
 from motion.indexer import LockingIndexers
 from motion.joint import Joint
 from motion.kinematics import Kinematics, KinematicsError, KinematicsType
+from motion.modes import COORD, FREE, TELEOP
 from motion.pose import AXIS_LETTERS, NUM_AXES, EmcPose
-from motion.status import MotionStatusRuns
+from motion.spindle import OrientState, Spindle, SpindleControl, SpindleInputs
+from motion.status import QUEUE_FULL_MARGIN, MotionStatusRuns, StatusFilling
 from motion.teleop import Fit, JointLimiter, JointLimits, TeleopPlanner
 from motion.tp import TermCond, TrajectoryPlanner
 from motion.tp.planner import ProbeType
+from motion.wheels import JogWheels, WheelInputs
 from nml import emc
+from nml.commands import Handlers, Refused, handler
 
-FREE, COORD, TELEOP = (
-    emc.EMC_TRAJ_MODE_ENUM.FREE,
-    emc.EMC_TRAJ_MODE_ENUM.COORD,
-    emc.EMC_TRAJ_MODE_ENUM.TELEOP,
-)
 _TERM_CONDS = {
     emc.EMC_TRAJ_TERM_COND.STOP: TermCond.STOP,
     emc.EMC_TRAJ_TERM_COND.EXACT: TermCond.EXACT,
@@ -59,80 +56,6 @@ _TERM_CONDS = {
 }
 DEFAULT_JOINT_VEL = 1.0
 DEFAULT_JOINT_ACC = 1.0
-AT_SPEED_SETTLE_PERIODS = 2  # see Spindle.settle_periods
-
-
-class OrientState(enum.IntEnum):
-    """EMC_SPINDLE_STAT.orient_state (LinuxCNC's EMCMOT_ORIENT_*)."""
-
-    NONE = 0
-    IN_PROGRESS = 1
-    COMPLETE = 2
-    FAULTED = 3
-
-
-# traj.queueFull is reported while fewer planner slots than this are free (like LinuxCNC's
-# TC_QUEUE_MARGIN), so moves task has already sent still fit (see task's MAX_MOTION_IN_FLIGHT)
-QUEUE_FULL_MARGIN = 200
-
-
-@dataclass
-class Spindle:
-    """One spindle as motion drives it (the ``spindle.N.*`` pins, MOT-065)."""
-
-    speed: float = 0.0  # signed rpm commanded (negative: reverse); in CSS the maximum
-    scale: float = 1.0
-    css_factor: float = 0.0  # G96: rpm = css_factor / radius (signed); 0: fixed speed
-    css_xoffset: float = 0.0  # machine X of the spindle axis (G5x + G92 + tool offsets)
-    increasing: int = 0  # 1 after EMC_SPINDLE_INCREASE, -1 after DECREASE
-    is_brake_on: bool = True
-    is_override_enabled: bool = True
-    # M19: the orient pins and the cycle's state
-    is_orienting: bool = False
-    orient_angle: float = 0.0
-    orient_mode: int = 0
-    is_locked: bool = False
-    orient_state: OrientState = OrientState.NONE
-    orient_fault: int = 0
-    # per period: speed output, index handshake and the feedback seen
-    speed_out: float = 0.0  # rpm to the drive, after CSS, override, inhibit, rigid tap
-    is_index_enabled: bool = False
-    is_at_speed: bool = True
-    is_inhibited: bool = False
-    # periods during which at-speed is taken as false after a speed change: the pin
-    # still tells about the old speed until the drive has seen the new one
-    settle_periods: int = 0
-
-    def stop_orienting(self) -> None:
-        """M3, M4, M5 end any orient cycle and unlock the spindle."""
-        self.is_orienting = self.is_locked = False
-        self.orient_state = OrientState.NONE
-        self.orient_fault = 0
-
-
-@dataclass
-class SpindleInputs:
-    """HAL inputs of one spindle for one period (``spindle.N.*``)."""
-
-    revs: float = 0.0  # encoder position in revolutions, reset to 0 at the index
-    speed_in: float = 0.0  # measured revolutions per second
-    is_at_speed: bool = True
-    index_enable: bool = False  # cleared by the encoder at the index
-    is_oriented: bool = False
-    orient_fault: int = 0
-    is_inhibited: bool = False
-    is_amp_fault: bool = False
-
-
-@dataclass
-class WheelInputs:
-    """An MPG wheel on ``joint.N.jog-*`` or ``axis.L.jog-*`` (motion(9))."""
-
-    counts: int = 0
-    is_enabled: bool = False
-    scale: float = 0.0  # machine units per count
-    is_vel_mode: bool = False
-    accel_fraction: float = 1.0
 
 
 @dataclass
@@ -170,7 +93,7 @@ class JogLease:
     periods_left: int = -1  # set by the first check of an unleased jog
 
 
-class MotionController:
+class MotionController(SpindleControl, JogWheels, StatusFilling):
     def __init__(
         self,
         kinematics: Kinematics,
@@ -259,13 +182,17 @@ class MotionController:
         self._status_runs: MotionStatusRuns | None = None  # of the last fill_status's record
         # continuous jogs and who asked for them: (is joint, index) -> lease (motion/safety.py)
         self.jog_leases: dict[tuple[bool, int], JogLease] = {}
+        self.handlers = Handlers(self)  # the @handler methods below
 
     # ================================================================ commands
     def handle(self, cmd: emc.NMLmsg) -> str | None:
         """Carry out one command; ``None`` if done, else why it was refused ("" when it
-        says nothing new: a command after a refused move, see ``is_after_refused_move``)."""
-        handler = _HANDLERS.get(type(cmd))
-        if handler is None:
+        says nothing new: a command after a refused move, see ``is_after_refused_move``).
+        Handlers (``@handler``) raise ``Refused``; a ValueError or a kinematics error is a
+        refusal too, naming the command. Any other exception goes to the caller (motmod:
+        an internal error, motion off)."""
+        function = self.handlers.get(type(cmd))
+        if function is None:
             return f"motion does not handle {cmd.NAME}"
         if self.is_after_refused_move:
             if type(cmd) not in _ENDS_A_REFUSED_PROGRAM:
@@ -275,10 +202,13 @@ class MotionController:
         if is_move and cmd.id:  # task stamps the line into the move (emcmotCommand.id)
             self.next_motion_id = cmd.id  # (0: the last EMC_TRAJ_SET_MOTION_ID's stays)
         try:
-            problem = handler(self, cmd)
+            function(cmd)
+            return None
+        except Refused as refusal:
+            problem = refusal.reason
         except (ValueError, KinematicsError) as exc:
             problem = f"{cmd.NAME}: {exc}"
-        if problem and is_move:
+        if is_move:
             self.is_after_refused_move = True
         return problem
 
@@ -287,6 +217,7 @@ class MotionController:
             raise ValueError(f"joint {index} does not exist (0..{len(self.joints) - 1})")
         return self.joints[index]
 
+    @handler(emc.EMC_TRAJ_ENABLE)
     def _enable(self, _cmd: emc.NMLmsg) -> None:
         self.is_enabled = True
         self.is_faulted = [False] * len(self.joints)
@@ -295,14 +226,13 @@ class MotionController:
         if self.eoffsets.reset():  # hook: offsets zero at machine on, the pose keeps them
             self.tp.set_position(list(self.carte_pos_cmd))
             self._reset_teleop()
-        return None
 
+    @handler(emc.EMC_TRAJ_DISABLE)
     def _disable(self, _cmd: emc.NMLmsg | None = None) -> None:
         """Motion off: everything stops where it is, the queue is emptied (MOT-021)."""
         self.is_enabled = False
         self._stop_everything_now()
         self.indexers.release_all()  # hook: no unlock request with motion off
-        return None
 
     def estop(self) -> None:
         """E-stop from the safety board: motion off at once and every spindle stopped,
@@ -314,12 +244,6 @@ class MotionController:
         """Abort from the safety board: as task's abort, every spindle stops too."""
         self._abort(None)
         self.stop_spindles()
-
-    def stop_spindles(self) -> None:
-        for spindle in self.spindles:
-            spindle.stop_orienting()
-            spindle.speed = spindle.css_factor = 0.0
-            spindle.is_brake_on = True
 
     def fault(self, message: str) -> None:
         """A fault (found during a period, or motmod's report of an internal error): say
@@ -336,6 +260,7 @@ class MotionController:
         self.tp.set_position(list(self.carte_pos_cmd))
         self._reset_teleop()
 
+    @handler(emc.EMC_TRAJ_ABORT, emc.EMC_MOTION_ABORT)
     def _abort(self, _cmd: emc.NMLmsg | None) -> None:
         """ABORT: always accepted, idempotent; decelerates, then empties the queue (MOT-022)."""
         self.jog_leases.clear()
@@ -345,22 +270,22 @@ class MotionController:
         self._stop_teleop()
         self.tp.abort()
         self._orient_wait = None
-        return None
 
-    def _set_mode(self, cmd: emc.EMC_TRAJ_SET_MODE) -> str | None:
+    @handler(emc.EMC_TRAJ_SET_MODE)
+    def _set_mode(self, cmd: emc.EMC_TRAJ_SET_MODE) -> None:
         mode = cmd.mode
         if mode == self.mode:
-            return None
+            return
         if mode not in (FREE, COORD, TELEOP):
-            return f"unknown trajectory mode {mode}"
+            raise Refused(f"unknown trajectory mode {mode}")
         if self._is_moving():
-            return "cannot change mode while moving"
+            raise Refused("cannot change mode while moving")
         if (
             mode in (COORD, TELEOP)
             and self.kins.kinematics_type() != KinematicsType.IDENTITY  # as LinuxCNC's motion
             and not all(j.is_homed for j in self.joints)
         ):
-            return "all joints must be homed before going into coordinated mode"
+            raise Refused("all joints must be homed before going into coordinated mode")
         if mode == TELEOP:
             self._reset_teleop()
         if mode == COORD:  # (hook: the planner's pose is without external offsets)
@@ -369,7 +294,6 @@ class MotionController:
             for joint in self.joints:
                 joint.planner.reset(joint.pos_cmd)
         self.mode = mode
-        return None
 
     def _is_moving(self) -> bool:
         # (teleop motion only exists in teleop mode: leaving it waits for rest)
@@ -382,35 +306,36 @@ class MotionController:
         )
 
     # ---------------------------------------------------------------- jogs (free mode)
-    def _jog(self, cmd: emc.NMLmsg) -> str | None:
+    @handler(emc.EMC_JOG_CONT, emc.EMC_JOG_INCR, emc.EMC_JOG_ABS, emc.EMC_JOG_STOP)
+    def _jog(self, cmd: emc.NMLmsg) -> None:
         """Jog a joint in free mode, or a world axis in teleop mode (MOT-045..052)."""
         if not self.is_enabled:
-            return "cannot jog with motion disabled"
+            raise Refused("cannot jog with motion disabled")
         if self.homing.is_homing:
-            return "cannot jog while homing"
+            raise Refused("cannot jog while homing")
         if self.is_jog_inhibited and not isinstance(cmd, emc.EMC_JOG_STOP):
-            return "jogging is inhibited (motion.jog-inhibit)"
+            raise Refused("jogging is inhibited (motion.jog-inhibit)")
         index = cmd.joint_or_axis
         if cmd.jjogmode == emc.JOG_MODE.JOINT:
             if self.mode != FREE:
-                return "jogging a joint needs free (joint) mode"
+                raise Refused("jogging a joint needs free (joint) mode")
             joint = self._joint(index)
             is_locking = self.homing_configs[index].locking_indexer
             problem = self.extra_joints.check_jog(index) or self.indexers.check_jog(
                 index, None, is_locking
             )
             if problem and not isinstance(cmd, emc.EMC_JOG_STOP):
-                return problem  # (hook)
+                raise Refused(problem)  # (hook)
             planner, name = joint.planner, f"joint {index}"
             override = self.is_override_limits or not joint.is_homed
         else:
             if self.mode != TELEOP:
-                return "jogging an axis needs teleop mode (teleop_enable(1) once homed)"
+                raise Refused("jogging an axis needs teleop mode (teleop_enable(1) once homed)")
             if not 0 <= index < NUM_AXES or not self._has_axis(index):
-                return f"axis {index} is not used by this machine"
+                raise Refused(f"axis {index} is not used by this machine")
             problem = self.indexers.check_jog(None, index)
             if problem and not isinstance(cmd, emc.EMC_JOG_STOP):
-                return problem  # (hook)
+                raise Refused(problem)  # (hook)
             planner, name = self.axis_planners[index], f"axis {AXIS_LETTERS[index].upper()}"
             override = self.is_override_limits
         try:
@@ -424,13 +349,12 @@ class MotionController:
             else:
                 planner.jog_abs(cmd.pos, abs(cmd.vel), override)
         except JogLimitError as exc:
-            return f"{name}: {exc}"
+            raise Refused(f"{name}: {exc}") from None
         key = (cmd.jjogmode == emc.JOG_MODE.JOINT, index)
         if isinstance(cmd, emc.EMC_JOG_CONT):  # runs while its requester keeps the lease
             self.jog_leases[key] = JogLease(name, cmd.lease_slot, cmd.lease_pid)
         else:
             self.jog_leases.pop(key, None)
-        return None
 
     def jog_planner(self, key: tuple[bool, int]) -> FreePlanner:
         """The planner of a jog lease's key: (is joint, index)."""
@@ -449,21 +373,21 @@ class MotionController:
         return bool(getattr(self.kins, "axis_mask", 0b111) >> index & 1)
 
     # ---------------------------------------------------------------- teleop (MOT-016)
-    def _teleop_vector(self, cmd: emc.EMC_TRAJ_SET_TELEOP_VECTOR) -> str | None:
+    @handler(emc.EMC_TRAJ_SET_TELEOP_VECTOR)
+    def _teleop_vector(self, cmd: emc.EMC_TRAJ_SET_TELEOP_VECTOR) -> None:
         """SET_TELEOP_VECTOR (MOT-055): the cartesian velocity teleop mode follows, on top
         of any axis jogs; a zero vector brings it to a coordinated stop."""
         if self.mode != TELEOP:
-            return "teleop vector needs teleop mode"
+            raise Refused("teleop vector needs teleop mode")
         if not self.is_enabled:
-            return "teleop vector needs motion enabled"
+            raise Refused("teleop vector needs motion enabled")
         vector = _pose(cmd.vector).as_tuple()
         if any(vector) and self.is_jog_inhibited:
-            return "jogging is inhibited (motion.jog-inhibit)"
+            raise Refused("jogging is inhibited (motion.jog-inhibit)")
         for index, value in enumerate(vector):
             if value and not self._has_axis(index):
-                return f"axis {AXIS_LETTERS[index].upper()} is not used by this machine"
+                raise Refused(f"axis {AXIS_LETTERS[index].upper()} is not used by this machine")
         self.teleop.set_velocity(vector)
-        return None
 
     def _reset_teleop(self) -> None:
         """Teleop at rest where the pose is (entering teleop MOT-027, motion off)."""
@@ -591,11 +515,12 @@ class MotionController:
                 )
         return "\n".join(problems) or None
 
-    def _linear_move(self, cmd: emc.EMC_TRAJ_LINEAR_MOVE) -> str | None:
+    @handler(emc.EMC_TRAJ_LINEAR_MOVE)
+    def _linear_move(self, cmd: emc.EMC_TRAJ_LINEAR_MOVE) -> None:
         end = _pose(cmd.end)
         problem = self._require_coord() or self._check_soft_limits(end, "Linear move")
         if problem:
-            return problem
+            raise Refused(problem)
         is_indexing = cmd.type == emc.EMC_MOTION_TYPE.INDEXROTARY  # (task named the joint)
         is_rapid = is_indexing or cmd.type == emc.EMC_MOTION_TYPE.TRAVERSE
         self._note_move_type(is_rapid)
@@ -607,7 +532,7 @@ class MotionController:
             if joint >= 0:
                 problem = self.indexers.check_move(joint)
                 if problem:
-                    return problem
+                    raise Refused(problem)
                 indexer = {"indexer_joint": joint}
         self.tp.add_line(
             list(end),
@@ -621,13 +546,13 @@ class MotionController:
             **indexer,
         )
         self._flush_synchronised_outputs()
-        return None
 
-    def _circular_move(self, cmd: emc.EMC_TRAJ_CIRCULAR_MOVE) -> str | None:
+    @handler(emc.EMC_TRAJ_CIRCULAR_MOVE)
+    def _circular_move(self, cmd: emc.EMC_TRAJ_CIRCULAR_MOVE) -> None:
         end = _pose(cmd.end)
         problem = self._require_coord() or self._check_soft_limits(end, "Circular move")
         if problem:
-            return problem
+            raise Refused(problem)
         self._note_move_type(is_rapid=False)
         # LinuxCNC's turn: n >= 0 counter-clockwise about the normal plus n full turns;
         # -1, -2 ... clockwise (one arc, plus -turn - 1 full turns): the other way round
@@ -649,7 +574,6 @@ class MotionController:
             tolerance=self.tolerance,
         )
         self._flush_synchronised_outputs()
-        return None
 
     def _note_move_type(self, is_rapid: bool) -> None:
         """In CSS mode a feed after a rapid waits for the spindle's new speed (motion(9))."""
@@ -658,15 +582,15 @@ class MotionController:
             self.tp.wait_for_spindle_at_speed()
         self._is_last_move_rapid = is_rapid
 
-    def _probe(self, cmd: emc.EMC_TRAJ_PROBE) -> str | None:
+    @handler(emc.EMC_TRAJ_PROBE)
+    def _probe(self, cmd: emc.EMC_TRAJ_PROBE) -> None:
         end = _pose(cmd.pos)
         problem = self._require_coord() or self._check_soft_limits(end, "Probe move")
         if problem:
-            return problem
+            raise Refused(problem)
         # probe_type as in LinuxCNC: bit 1 set = away (G38.4/5), bit 0 = no error if no trip
         probe = ProbeType.AWAY if cmd.probe_type & 2 else ProbeType.TOWARD
         self.tp.add_probe(list(end), cmd.vel, cmd.ini_maxvel, cmd.acc, self.next_motion_id, probe)
-        return None
 
     def _flush_synchronised_outputs(self) -> None:
         """M62/M64-style outputs queued with the next move take effect now (MOT-060/061)."""
@@ -678,46 +602,52 @@ class MotionController:
         self._pending_aouts.clear()
 
     # ---------------------------------------------------------------- settings
-    def _set_term_cond(self, cmd: emc.EMC_TRAJ_SET_TERM_COND) -> str | None:
+    @handler(emc.EMC_TRAJ_SET_TERM_COND)
+    def _set_term_cond(self, cmd: emc.EMC_TRAJ_SET_TERM_COND) -> None:
         if cmd.cond not in _TERM_CONDS:
-            return f"unknown termination condition {cmd.cond}"
+            raise Refused(f"unknown termination condition {cmd.cond}")
         if cmd.tolerance < 0:
-            return f"negative blend tolerance {cmd.tolerance}"
+            raise Refused(f"negative blend tolerance {cmd.tolerance}")
         self.term_cond = _TERM_CONDS[emc.EMC_TRAJ_TERM_COND(cmd.cond)]
         self.tolerance = cmd.tolerance
-        return None
 
-    def _set_velocity(self, cmd: emc.EMC_TRAJ_SET_VELOCITY) -> str | None:
+    @handler(emc.EMC_TRAJ_SET_VELOCITY)
+    def _set_velocity(self, cmd: emc.EMC_TRAJ_SET_VELOCITY) -> None:
         if not cmd.velocity > 0:
-            return f"velocity must be positive, got {cmd.velocity}"
+            raise Refused(f"velocity must be positive, got {cmd.velocity}")
         self.traj_vel = cmd.velocity
-        return None
 
-    def _set_acceleration(self, cmd: emc.EMC_TRAJ_SET_ACCELERATION) -> str | None:
+    @handler(emc.EMC_TRAJ_SET_ACCELERATION)
+    def _set_acceleration(self, cmd: emc.EMC_TRAJ_SET_ACCELERATION) -> None:
         if not cmd.acceleration > 0:
-            return f"acceleration must be positive, got {cmd.acceleration}"
+            raise Refused(f"acceleration must be positive, got {cmd.acceleration}")
         self.traj_acc = cmd.acceleration
-        return None
 
-    def _set_max_velocity(self, cmd: emc.EMC_TRAJ_SET_MAX_VELOCITY) -> str | None:
+    @handler(emc.EMC_TRAJ_SET_MAX_VELOCITY)
+    def _set_max_velocity(self, cmd: emc.EMC_TRAJ_SET_MAX_VELOCITY) -> None:
         if not cmd.velocity > 0:
-            return f"maximum velocity must be positive, got {cmd.velocity}"
+            raise Refused(f"maximum velocity must be positive, got {cmd.velocity}")
         self.max_vel = cmd.velocity
         self._apply_traj_limits()
-        return None
 
-    def _set_max_acceleration(self, cmd: emc.EMC_TRAJ_SET_MAX_ACCELERATION) -> str | None:
+    @handler(emc.EMC_TRAJ_SET_MAX_ACCELERATION)
+    def _set_max_acceleration(self, cmd: emc.EMC_TRAJ_SET_MAX_ACCELERATION) -> None:
         if not cmd.acceleration > 0:
-            return f"maximum acceleration must be positive, got {cmd.acceleration}"
+            raise Refused(f"maximum acceleration must be positive, got {cmd.acceleration}")
         self.max_acc = cmd.acceleration
         self._apply_traj_limits()
-        return None
 
-    def _axis_settings(self, cmd: emc.NMLmsg) -> str | None:
+    @handler(
+        emc.EMC_AXIS_SET_MIN_POSITION_LIMIT,
+        emc.EMC_AXIS_SET_MAX_POSITION_LIMIT,
+        emc.EMC_AXIS_SET_MAX_VELOCITY,
+        emc.EMC_AXIS_SET_MAX_ACCELERATION,
+    )
+    def _axis_settings(self, cmd: emc.NMLmsg) -> None:
         """[AXIS_L] limits sent by task at start-up (KIN-002)."""
         axis = cmd.axis
         if not 0 <= axis < NUM_AXES:
-            return f"axis {axis} does not exist (0..{NUM_AXES - 1} for X..W)"
+            raise Refused(f"axis {axis} does not exist (0..{NUM_AXES - 1} for X..W)")
         if isinstance(cmd, emc.EMC_AXIS_SET_MIN_POSITION_LIMIT):
             self.axis_min_limit[axis] = cmd.limit
         elif isinstance(cmd, emc.EMC_AXIS_SET_MAX_POSITION_LIMIT):
@@ -737,43 +667,51 @@ class MotionController:
             self.axis_min_limit[axis],
             self.axis_max_limit[axis],
         )
-        return None
 
     def _apply_traj_limits(self) -> None:
         self.tp.set_limits(self.axis_max_vel, self.axis_max_acc, self.max_vel, self.max_acc)
 
-    def _set_scale(self, cmd: emc.EMC_TRAJ_SET_SCALE) -> str | None:
+    @handler(emc.EMC_TRAJ_SET_SCALE)
+    def _set_scale(self, cmd: emc.EMC_TRAJ_SET_SCALE) -> None:
         self.tp.set_feed_scale(cmd.scale)
         for joint in self.joints:
             joint.planner.scale = max(cmd.scale, 0.0)
-        return None
 
-    def _set_rapid_scale(self, cmd: emc.EMC_TRAJ_SET_RAPID_SCALE) -> str | None:
+    @handler(emc.EMC_TRAJ_SET_RAPID_SCALE)
+    def _set_rapid_scale(self, cmd: emc.EMC_TRAJ_SET_RAPID_SCALE) -> None:
         self.tp.set_rapid_scale(cmd.scale)
-        return None
 
+    @handler(emc.EMC_TRAJ_SET_MOTION_ID)
     def _set_motion_id(self, cmd: emc.EMC_TRAJ_SET_MOTION_ID) -> None:
         self.next_motion_id = cmd.id
-        return None
 
+    @handler(emc.EMC_TRAJ_PAUSE)
     def _pause(self, _cmd: emc.NMLmsg) -> None:
         self.tp.pause()
-        return None
 
+    @handler(emc.EMC_TRAJ_RESUME)
     def _resume(self, _cmd: emc.NMLmsg) -> None:
         self.tp.resume()
-        return None
 
+    @handler(emc.EMC_TRAJ_STEP)
     def _step(self, _cmd: emc.NMLmsg) -> None:
         self.tp.step_once()
-        return None
 
+    @handler(emc.EMC_TRAJ_CLEAR_PROBE_TRIPPED_FLAG)
     def _clear_probe(self, _cmd: emc.NMLmsg) -> None:
         self.tp.clear_probe_flag()
-        return None
 
     # ---------------------------------------------------------------- joints
-    def _joint_limits(self, cmd: emc.NMLmsg) -> str | None:
+    @handler(
+        emc.EMC_JOINT_SET_MIN_POSITION_LIMIT,
+        emc.EMC_JOINT_SET_MAX_POSITION_LIMIT,
+        emc.EMC_JOINT_SET_MAX_VELOCITY,
+        emc.EMC_JOINT_SET_FERROR,
+        emc.EMC_JOINT_SET_MIN_FERROR,
+        emc.EMC_JOINT_SET_BACKLASH,
+        emc.EMC_JOINT_SET_MAX_ACCELERATION,
+    )
+    def _joint_limits(self, cmd: emc.NMLmsg) -> None:
         joint = self._joint(cmd.joint)
         planner = joint.planner
         max_vel, max_acc = planner.max_vel, planner.max_acc
@@ -793,25 +731,25 @@ class MotionController:
         elif isinstance(cmd, emc.EMC_JOINT_SET_BACKLASH):
             joint.set_backlash(cmd.backlash)
         planner.set_limits(max_vel, max_acc, min_limit, max_limit)
-        return None
 
-    def _motor_offset(self, cmd: emc.EMC_JOINT_SET_MOTOR_OFFSET) -> str | None:
+    @handler(emc.EMC_JOINT_SET_MOTOR_OFFSET)
+    def _motor_offset(self, cmd: emc.EMC_JOINT_SET_MOTOR_OFFSET) -> None:
         """Where the joint is, from the saved position file: no motor moves (MOT-005)."""
         joint = self._joint(cmd.joint)
         if self.is_enabled or joint.is_homed:
-            return "the motor offset can only be set while motion is off and unhomed"
+            raise Refused("the motor offset can only be set while motion is off and unhomed")
         joint.motor_offset = check_finite("motor offset", cmd.offset)
         joint.update_feedback(joint.motor_pos_fb)
         joint.hold_position()
         joint.update_command(self.period_s)
-        return None
 
-    def _homing_params(self, cmd: emc.EMC_JOINT_SET_HOMING_PARAMS) -> str | None:
+    @handler(emc.EMC_JOINT_SET_HOMING_PARAMS)
+    def _homing_params(self, cmd: emc.EMC_JOINT_SET_HOMING_PARAMS) -> None:
         """[JOINT_n] homing keys, sent by task at start-up (MOT-043)."""
         index = cmd.joint
         self._joint(index)
         if self.homing.is_homing:
-            return "cannot change homing parameters while homing"
+            raise Refused("cannot change homing parameters while homing")
         sequence = None if cmd.home_sequence == emc.NO_HOME_SEQUENCE else cmd.home_sequence
         self.homing_configs[index] = HomingConfig(
             home=cmd.home,
@@ -828,14 +766,14 @@ class MotionController:
             locking_indexer=bool(cmd.locking_indexer),
         )
         self.homing = self.homing_class(self.joints, self.homing_configs)
-        return None
 
-    def _home(self, cmd: emc.EMC_JOINT_HOME) -> str | None:
+    @handler(emc.EMC_JOINT_HOME)
+    def _home(self, cmd: emc.EMC_JOINT_HOME) -> None:
         """Home one joint, or all (-1) sequence by sequence (MOT-043, homing module)."""
         if self.mode != FREE:
-            return "homing needs free (joint) mode"
+            raise Refused("homing needs free (joint) mode")
         if not self.is_enabled:
-            return "cannot home with motion disabled"
+            raise Refused("cannot home with motion disabled")
         try:
             if cmd.joint == -1:
                 self.homing.home_all()
@@ -843,97 +781,55 @@ class MotionController:
                 self._joint(cmd.joint)
                 self.homing.home_joint(cmd.joint)
         except HomingError as exc:
-            return str(exc)
-        return None
+            raise Refused(str(exc)) from None
 
-    def _unhome(self, cmd: emc.EMC_JOINT_UNHOME) -> str | None:
+    @handler(emc.EMC_JOINT_UNHOME)
+    def _unhome(self, cmd: emc.EMC_JOINT_UNHOME) -> None:
         if self._is_moving():
-            return "cannot unhome while moving"
+            raise Refused("cannot unhome while moving")
         problem = self.extra_joints.check_unhome(cmd.joint, self.is_enabled)  # (hook)
         if problem:
-            return problem
+            raise Refused(problem)
         try:
             self.homing.unhome(cmd.joint)
         except HomingError as exc:
-            return str(exc)
-        return None
+            raise Refused(str(exc)) from None
 
+    @handler(emc.EMC_JOINT_OVERRIDE_LIMITS)
     def _override_limits(self, cmd: emc.EMC_JOINT_OVERRIDE_LIMITS) -> None:
         self.is_override_limits = cmd.joint >= 0
-        return None
 
     # ---------------------------------------------------------------- outputs, spindle
-    def _set_dout(self, cmd: emc.EMC_MOTION_SET_DOUT) -> str | None:
+    @handler(emc.EMC_MOTION_SET_DOUT)
+    def _set_dout(self, cmd: emc.EMC_MOTION_SET_DOUT) -> None:
         if cmd.index >= len(self.digital_out):
-            return f"digital output {cmd.index} does not exist (num_dio {len(self.digital_out)})"
+            raise Refused(
+                f"digital output {cmd.index} does not exist (num_dio {len(self.digital_out)})"
+            )
         if cmd.now:
             self.digital_out[cmd.index] = bool(cmd.start)
         else:
             self._pending_douts.append((cmd.index, bool(cmd.start)))
-        return None
 
-    def _set_aout(self, cmd: emc.EMC_MOTION_SET_AOUT) -> str | None:
+    @handler(emc.EMC_MOTION_SET_AOUT)
+    def _set_aout(self, cmd: emc.EMC_MOTION_SET_AOUT) -> None:
         if cmd.index >= len(self.analog_out):
-            return f"analog output {cmd.index} does not exist (num_aio {len(self.analog_out)})"
+            raise Refused(
+                f"analog output {cmd.index} does not exist (num_aio {len(self.analog_out)})"
+            )
         if cmd.now:
             self.analog_out[cmd.index] = cmd.start
         else:
             self._pending_aouts.append((cmd.index, cmd.start))
-        return None
 
-    def _spindle(self, cmd: emc.NMLmsg) -> str | None:
-        """M3/M4/M5, S, brake, M19 and its wait (MOT-065; ``spindle.N.*`` pins)."""
-        if not 0 <= cmd.spindle < len(self.spindles):
-            return f"spindle {cmd.spindle} does not exist (num_spindles {len(self.spindles)})"
-        spindle = self.spindles[cmd.spindle]
-        spindle.increasing = 0
-        spindle.settle_periods = AT_SPEED_SETTLE_PERIODS
-        if isinstance(cmd, emc.EMC_SPINDLE_ON):
-            spindle.stop_orienting()
-            spindle.speed = cmd.speed
-            spindle.css_factor, spindle.css_xoffset = cmd.factor, cmd.xoffset
-            spindle.is_brake_on = False
-            if cmd.wait_for_spindle_at_speed:
-                self.tp.wait_for_spindle_at_speed()
-        elif isinstance(cmd, emc.EMC_SPINDLE_OFF):
-            spindle.stop_orienting()
-            spindle.speed = spindle.css_factor = 0.0
-            spindle.is_brake_on = True
-        elif isinstance(cmd, emc.EMC_SPINDLE_SPEED):
-            sign = -1.0 if spindle.speed < 0 else 1.0
-            spindle.speed = sign * abs(cmd.speed) if spindle.speed else 0.0
-            spindle.css_factor = math.copysign(cmd.factor, sign) if spindle.speed else 0.0
-            spindle.css_xoffset = cmd.xoffset
-            if spindle.speed:  # feed moves wait for the new speed (motion(9) at-speed)
-                self.tp.wait_for_spindle_at_speed()
-        elif isinstance(cmd, emc.EMC_SPINDLE_INCREASE | emc.EMC_SPINDLE_DECREASE):
-            step = abs(cmd.speed) or 100.0
-            spindle.increasing = 1
-            if isinstance(cmd, emc.EMC_SPINDLE_DECREASE):
-                step = -min(step, abs(spindle.speed))
-                spindle.increasing = -1
-            spindle.speed += step if spindle.speed >= 0 else -step
-        elif isinstance(cmd, emc.EMC_SPINDLE_BRAKE_ENGAGE):
-            spindle.is_brake_on = True
-        elif isinstance(cmd, emc.EMC_SPINDLE_BRAKE_RELEASE):
-            spindle.is_brake_on = False
-        elif isinstance(cmd, emc.EMC_SPINDLE_ORIENT):
-            # M19: stop, then the drive turns to the angle and answers on is-oriented
-            spindle.speed = spindle.css_factor = 0.0
-            spindle.is_brake_on = spindle.is_locked = False
-            spindle.is_orienting = True
-            spindle.orient_angle, spindle.orient_mode = cmd.orientation, cmd.mode
-            spindle.orient_state, spindle.orient_fault = OrientState.IN_PROGRESS, 0
-        elif isinstance(cmd, emc.EMC_SPINDLE_WAIT_ORIENT_COMPLETE):
-            # the moves after it wait; inpos stays false until it completes (task waits)
-            if spindle.orient_state == OrientState.FAULTED:
-                return f"spindle {cmd.spindle} orient fault {spindle.orient_fault}"
-            timeout = cmd.timeout if cmd.timeout > 0 else math.inf
-            if spindle.orient_state == OrientState.IN_PROGRESS:
-                self._orient_wait = (cmd.spindle, timeout)
-        return None
-
-    def _settings(self, cmd: emc.NMLmsg) -> str | None:
+    @handler(
+        emc.EMC_TRAJ_SET_OFFSET,
+        emc.EMC_TRAJ_SET_FO_ENABLE,
+        emc.EMC_TRAJ_SET_SO_ENABLE,
+        emc.EMC_TRAJ_SET_FH_ENABLE,
+        emc.EMC_MOTION_ADAPTIVE,
+    )
+    def _settings(self, cmd: emc.NMLmsg) -> None:
         """Settings kept for status and later moves: tool offset, override enables."""
         if isinstance(cmd, emc.EMC_TRAJ_SET_OFFSET):
             self.tool_offset = _pose(cmd.offset)
@@ -943,27 +839,18 @@ class MotionController:
             self.is_feed_hold_enabled = bool(cmd.mode)
         elif isinstance(cmd, emc.EMC_TRAJ_SET_SO_ENABLE):
             if not 0 <= cmd.spindle < len(self.spindles):
-                return f"spindle {cmd.spindle} does not exist"
+                raise Refused(f"spindle {cmd.spindle} does not exist")
             self.spindles[cmd.spindle].is_override_enabled = bool(cmd.mode)
         elif isinstance(cmd, emc.EMC_MOTION_ADAPTIVE):
             self.is_adaptive_feed_enabled = bool(cmd.status)
-        return None
 
-    def _spindle_sync(self, cmd: emc.EMC_TRAJ_SET_SPINDLESYNC) -> str | None:
-        """G33, G76, G95: the moves queued next follow the spindle (MOT-062, MOT-065)."""
-        if not 0 <= cmd.spindle < len(self.spindles):
-            return f"spindle {cmd.spindle} does not exist (num_spindles {len(self.spindles)})"
-        self.tp.set_spindle_sync(cmd.feed_per_revolution, bool(cmd.velocity_mode))
-        if cmd.feed_per_revolution:
-            self.sync_spindle = cmd.spindle
-        return None
-
-    def _rigid_tap(self, cmd: emc.EMC_TRAJ_RIGID_TAP) -> str | None:
+    @handler(emc.EMC_TRAJ_RIGID_TAP)
+    def _rigid_tap(self, cmd: emc.EMC_TRAJ_RIGID_TAP) -> None:
         """G33.1: in following the spindle, spindle reversed, out again (MOT-062)."""
         end = _pose(cmd.pos)
         problem = self._require_coord() or self._check_soft_limits(end, "Rigid tap move")
         if problem:
-            return problem
+            raise Refused(problem)
         self.tp.add_rigid_tap(
             list(end),
             cmd.ini_maxvel,
@@ -972,13 +859,6 @@ class MotionController:
             retract_scale=cmd.scale if cmd.scale > 0 else 1.0,
         )
         self._is_last_move_rapid = False
-        return None
-
-    def _spindle_scale(self, cmd: emc.EMC_TRAJ_SET_SPINDLE_SCALE) -> str | None:
-        if not 0 <= cmd.spindle < len(self.spindles):
-            return f"spindle {cmd.spindle} does not exist (num_spindles {len(self.spindles)})"
-        self.spindles[cmd.spindle].scale = cmd.scale
-        return None
 
     # ================================================================ servo period
     def update(self, inputs: Inputs) -> None:
@@ -1037,139 +917,7 @@ class MotionController:
         self._drive_spindles()
 
     # ---------------------------------------------------------------- jog wheels
-    def _jog_wheels(self, inputs: Inputs) -> None:
-        """MPG wheels: each count moves the joint (free mode) or the axis (teleop mode) by
-        jog-scale within its limits; counts that arrive while a wheel cannot jog are
-        dropped, as LinuxCNC does (motion(9) jog pins)."""
-        self.is_jog_inhibited = inputs.is_jog_inhibited
-        self._stop_jogs_on_request(inputs.is_jog_stop, inputs.is_jog_stop_immediate)
-        can_jog = self.is_enabled and not self.homing.is_homing and not self.is_jog_inhibited
-        for index, wheel in enumerate(inputs.joint_wheels):
-            delta = self._wheel_delta(("joint", index), wheel)
-            if delta and can_jog and self.mode == FREE:
-                joint = self.joints[index]
-                override = self.is_override_limits or not joint.is_homed
-                self._wheel_jog(joint.planner, delta * wheel.scale, wheel, override)
-        for index, wheel in inputs.axis_wheels.items():
-            delta = self._wheel_delta(("axis", index), wheel)
-            if delta and can_jog and self.mode == TELEOP:
-                planner = self.axis_planners[index]
-                self._wheel_jog(planner, delta * wheel.scale, wheel, self.is_override_limits)
-
-    def _stop_jogs_on_request(self, is_stop: bool, is_stop_immediate: bool) -> None:
-        """motion.jog-stop / jog-stop-immediate: a rising edge stops the jogs running,
-        braking or at once."""
-        was_stop, was_stop_immediate = self._jog_stops
-        self._jog_stops = (is_stop, is_stop_immediate)
-        if self.homing.is_homing or self.mode == COORD:
-            return
-        is_stop_now = is_stop_immediate and not was_stop_immediate
-        is_stop_braking = is_stop and not was_stop
-        if self.mode == TELEOP:  # the teleop vector stops too (a cartesian jog)
-            if is_stop_now:
-                self._reset_teleop()
-            elif is_stop_braking:
-                self._stop_teleop()
-            return
-        planners = [j.planner for j in self.joints]
-        if is_stop_now:
-            for planner in planners:
-                planner.reset(planner.pos)
-        elif is_stop_braking:
-            for planner in planners:
-                planner.stop()
-
-    @property
-    def is_jogging(self) -> bool:
-        """motion.jog-is-active: a joint (free mode) or an axis (teleop mode) jogs."""
-        if self.mode == FREE and not self.homing.is_homing:
-            return any(j.planner.is_active for j in self.joints)
-        return self.mode == TELEOP and self._is_teleop_moving()
-
-    def _wheel_delta(self, key: tuple[str, int], wheel: WheelInputs) -> int:
-        last = self._wheel_counts.get(key, wheel.counts)
-        self._wheel_counts[key] = wheel.counts
-        return wheel.counts - last if wheel.is_enabled else 0
-
-    @staticmethod
-    def _wheel_jog(planner: FreePlanner, offset: float, wheel: WheelInputs, override: bool) -> None:
-        # at a limit, or a bad scale: the wheel does nothing, as in LinuxCNC
-        with contextlib.suppress(JogLimitError, ValueError):
-            planner.jog_wheel(offset, wheel.accel_fraction, wheel.is_vel_mode, override)
-
     # ---------------------------------------------------------------- spindle, per period
-    def _read_spindles(self, inputs: list[SpindleInputs]) -> None:
-        """Spindle feedback: orient cycle, index handshake, the planner's spindle inputs."""
-        for index, (spindle, pins) in enumerate(zip(self.spindles, inputs, strict=False)):
-            spindle.is_at_speed = pins.is_at_speed and not spindle.settle_periods
-            spindle.settle_periods = max(spindle.settle_periods - 1, 0)
-            spindle.is_inhibited = pins.is_inhibited
-            if pins.is_amp_fault and self.is_enabled:
-                self.fault(f"spindle {index} amplifier fault")
-            if spindle.is_orienting:
-                if pins.orient_fault:
-                    spindle.is_orienting = False
-                    spindle.orient_state = OrientState.FAULTED
-                    spindle.orient_fault = pins.orient_fault
-                    self.errors.append(f"spindle {index} orient fault {pins.orient_fault}")
-                elif pins.is_oriented:  # done: the spindle is held at the angle
-                    spindle.is_orienting = False
-                    spindle.is_locked = spindle.is_brake_on = True
-                    spindle.orient_state = OrientState.COMPLETE
-        self._check_orient_wait()
-        tp = self.tp
-        tp.is_start_held = self._orient_wait is not None
-        if not inputs:
-            return
-        sync = self.spindles[self.sync_spindle]
-        pins = inputs[self.sync_spindle]
-        if not tp.is_waiting_for_index:
-            sync.is_index_enabled = False  # (also when an abort ended the wait)
-        elif sync.is_index_enabled and not pins.index_enable:  # the encoder saw the index
-            sync.is_index_enabled = False
-            tp.index_found()
-        else:
-            sync.is_index_enabled = True
-        # revolutions counted in the programmed direction (a rigid tap's reversal excluded)
-        direction = -1.0 if sync.speed < 0 else 1.0
-        tp.spindle_revs = pins.revs * direction
-        tp.spindle_rps = abs(pins.speed_in)
-        tp.is_spindle_at_speed = all(
-            s.is_at_speed for s in self.spindles if s.speed or s.css_factor
-        )
-
-    def _check_orient_wait(self) -> None:
-        """EMC_SPINDLE_WAIT_ORIENT_COMPLETE: done, faulted (run aborted) or timed out."""
-        if self._orient_wait is None:
-            return
-        index, seconds_left = self._orient_wait
-        state = self.spindles[index].orient_state
-        if state == OrientState.IN_PROGRESS and seconds_left > 0:
-            self._orient_wait = (index, seconds_left - self.period_s)
-            return
-        self._orient_wait = None
-        if state == OrientState.IN_PROGRESS:
-            self.errors.append(f"spindle {index} orient timed out")
-        if state != OrientState.COMPLETE:
-            self.tp.abort()
-
-    def _drive_spindles(self) -> None:
-        """The speed each spindle is told: fixed or from the radius (G96 CSS), times the
-        override, reversed by a rigid tap, 0 while inhibited or orienting."""
-        x = self.carte_pos_cmd.x
-        for index, spindle in enumerate(self.spindles):
-            rpm = spindle.speed
-            if spindle.css_factor:
-                radius = abs(x - spindle.css_xoffset)
-                css_rpm = abs(spindle.css_factor) / radius if radius > 0 else math.inf
-                rpm = math.copysign(min(css_rpm, abs(spindle.speed)), spindle.css_factor)
-            rpm *= spindle.scale
-            if index == self.sync_spindle:
-                rpm *= self.tp.spindle_reversal
-            if spindle.is_orienting or spindle.is_inhibited:
-                rpm = 0.0
-            spindle.speed_out = rpm
-
     def _set_joints_from_pose(self, pose: EmcPose) -> None:
         try:
             targets = self.kins.inverse(pose)
@@ -1232,105 +980,6 @@ class MotionController:
             return xyz or math.hypot(*speeds[3:])
         return 0.0
 
-    def fill_status(self, stat: emc.EMC_MOTION_STAT) -> None:
-        """Write the controller's state into an EMC_MOTION_STAT (MOT-066..071), in place
-        and in a few assignments (motion/status.py): motmod calls this every period."""
-        runs = self._status_runs
-        if runs is None or runs.stat is not stat:
-            runs = self._status_runs = MotionStatusRuns(stat, len(self.joints), len(self.spindles))
-        tp = self.tp
-        is_coord = self.mode == COORD
-        is_enabled = self.is_enabled
-        move = tp.current_move if is_coord else None
-        runs.traj_state.write(
-            self.period_s,  # cycleTime
-            len(self.joints),
-            len(self.spindles),
-            getattr(self.kins, "axis_mask", 0b111),
-            self.mode,
-            is_enabled,
-            self.is_in_position,  # inpos
-            tp.queue_depth,  # queue
-            tp.active_queue if is_coord else 0,  # activeQueue
-            tp.free_slots < QUEUE_FULL_MARGIN,  # queueFull
-            tp.motion_id,  # id
-            tp.is_paused,
-            tp.feed_scale,  # scale
-            tp.rapid_scale,
-            *self.carte_pos_cmd.as_tuple(),  # position
-            *self.carte_pos_fb.as_tuple(),  # actualPosition
-            self.traj_vel,  # velocity
-            self.traj_acc,  # acceleration
-            _finite_or_zero(self.max_vel),  # maxVelocity
-            _finite_or_zero(self.max_acc),  # maxAcceleration
-            *tp.probe_pos.tolist(),  # probedPosition
-            tp.probe_tripped,
-            move is not None and move.probe is not None,  # probing
-        )
-        runs.traj_path.write(
-            int(self.kins.kinematics_type()),
-            _motion_type(move),
-            tp.distance_to_go if is_coord else 0.0,
-            *(tp.dtg.tolist() if is_coord else _ZERO_POSE),  # dtg
-            self.current_vel,
-            self.is_feed_override_enabled,
-            self.is_adaptive_feed_enabled,
-            self.is_feed_hold_enabled,
-        )
-        is_override_limits = self.is_override_limits
-        for joint, fault, out, switches in zip(
-            self.joints, self.is_faulted, runs.joints, runs.joint_switches, strict=True
-        ):
-            out.write(
-                joint.backlash,
-                _finite_or_zero(joint.min_limit),  # minPositionLimit
-                _finite_or_zero(joint.max_limit),  # maxPositionLimit
-                _finite_or_zero(joint.ferror_limit),  # maxFerror
-                _finite_or_zero(joint.min_ferror_limit),  # minFerror
-                joint.ferror,  # ferrorCurrent
-                joint.ferror_high_mark,
-                joint.pos_cmd,  # output
-                joint.pos_fb,  # input
-                joint.vel_cmd,  # velocity
-                not joint.planner.is_active,  # inpos
-                bool(joint.is_homing),  # (bool: set by the homing module, maybe a user's)
-                bool(joint.is_homed),
-                fault,
-                is_enabled,
-            )
-            switches.write(joint.is_on_neg_limit, joint.is_on_pos_limit, is_override_limits)
-        for spindle, out in zip(self.spindles, runs.spindles, strict=True):
-            speed = spindle.speed
-            is_on = speed != 0
-            out.write(
-                is_on,  # state
-                speed,
-                spindle.scale,  # spindle_scale
-                abs(speed) if spindle.css_factor else 0.0,  # css_maximum
-                spindle.css_factor,
-                (speed > 0) - (speed < 0),  # direction
-                spindle.is_brake_on,  # brake
-                spindle.increasing,
-                is_on,  # enabled
-                spindle.orient_state,
-                spindle.orient_fault,
-                spindle.is_override_enabled,
-                False,  # homed: spindles are not homed (LinuxCNC reports the same)
-            )
-        runs.write_io(self.digital_out, self.digital_in, self.analog_out, self.analog_in)
-
-
-def _motion_type(move) -> int:
-    """EMC_TRAJ_STAT.motion_type of the move being executed (0: none)."""
-    if move is None:
-        return 0
-    if move.probe is not None:
-        return emc.EMC_MOTION_TYPE.PROBING
-    if move.is_rapid:
-        return emc.EMC_MOTION_TYPE.TRAVERSE
-    is_straight = move.line is not None or move.rigid_tap is not None
-    return emc.EMC_MOTION_TYPE.FEED if is_straight else emc.EMC_MOTION_TYPE.ARC
-
 
 def _pose(pose: emc.EmcPose) -> EmcPose:
     # all nine values in one unpack (tran's X Y Z, then A B C U V W): nine field reads
@@ -1338,75 +987,6 @@ def _pose(pose: emc.EmcPose) -> EmcPose:
     return EmcPose(*pose.to_flat())
 
 
-def _finite_or_zero(value: float) -> float:
-    return value if math.isfinite(value) else 0.0
-
-
-_ZERO_POSE = (0.0,) * NUM_AXES
-
-
-_HANDLERS: dict[type, Callable[[MotionController, emc.NMLmsg], str | None]] = {
-    emc.EMC_TRAJ_ENABLE: MotionController._enable,
-    emc.EMC_TRAJ_DISABLE: MotionController._disable,
-    emc.EMC_TRAJ_ABORT: MotionController._abort,
-    emc.EMC_MOTION_ABORT: MotionController._abort,
-    emc.EMC_TRAJ_SET_MODE: MotionController._set_mode,
-    emc.EMC_TRAJ_SET_TELEOP_VECTOR: MotionController._teleop_vector,
-    emc.EMC_JOG_CONT: MotionController._jog,
-    emc.EMC_JOG_INCR: MotionController._jog,
-    emc.EMC_JOG_ABS: MotionController._jog,
-    emc.EMC_JOG_STOP: MotionController._jog,
-    emc.EMC_TRAJ_LINEAR_MOVE: MotionController._linear_move,
-    emc.EMC_TRAJ_CIRCULAR_MOVE: MotionController._circular_move,
-    emc.EMC_TRAJ_PROBE: MotionController._probe,
-    emc.EMC_TRAJ_CLEAR_PROBE_TRIPPED_FLAG: MotionController._clear_probe,
-    emc.EMC_TRAJ_SET_TERM_COND: MotionController._set_term_cond,
-    emc.EMC_TRAJ_SET_VELOCITY: MotionController._set_velocity,
-    emc.EMC_TRAJ_SET_ACCELERATION: MotionController._set_acceleration,
-    emc.EMC_TRAJ_SET_MAX_VELOCITY: MotionController._set_max_velocity,
-    emc.EMC_TRAJ_SET_MAX_ACCELERATION: MotionController._set_max_acceleration,
-    emc.EMC_TRAJ_SET_SCALE: MotionController._set_scale,
-    emc.EMC_TRAJ_SET_RAPID_SCALE: MotionController._set_rapid_scale,
-    emc.EMC_TRAJ_SET_MOTION_ID: MotionController._set_motion_id,
-    emc.EMC_TRAJ_PAUSE: MotionController._pause,
-    emc.EMC_TRAJ_RESUME: MotionController._resume,
-    emc.EMC_TRAJ_STEP: MotionController._step,
-    emc.EMC_JOINT_SET_MIN_POSITION_LIMIT: MotionController._joint_limits,
-    emc.EMC_JOINT_SET_MAX_POSITION_LIMIT: MotionController._joint_limits,
-    emc.EMC_JOINT_SET_MAX_VELOCITY: MotionController._joint_limits,
-    emc.EMC_JOINT_SET_FERROR: MotionController._joint_limits,
-    emc.EMC_JOINT_SET_MIN_FERROR: MotionController._joint_limits,
-    emc.EMC_JOINT_SET_BACKLASH: MotionController._joint_limits,
-    emc.EMC_JOINT_SET_MAX_ACCELERATION: MotionController._joint_limits,
-    emc.EMC_AXIS_SET_MIN_POSITION_LIMIT: MotionController._axis_settings,
-    emc.EMC_AXIS_SET_MAX_POSITION_LIMIT: MotionController._axis_settings,
-    emc.EMC_AXIS_SET_MAX_VELOCITY: MotionController._axis_settings,
-    emc.EMC_AXIS_SET_MAX_ACCELERATION: MotionController._axis_settings,
-    emc.EMC_JOINT_SET_HOMING_PARAMS: MotionController._homing_params,
-    emc.EMC_JOINT_SET_MOTOR_OFFSET: MotionController._motor_offset,
-    emc.EMC_JOINT_HOME: MotionController._home,
-    emc.EMC_JOINT_UNHOME: MotionController._unhome,
-    emc.EMC_JOINT_OVERRIDE_LIMITS: MotionController._override_limits,
-    emc.EMC_MOTION_SET_DOUT: MotionController._set_dout,
-    emc.EMC_MOTION_SET_AOUT: MotionController._set_aout,
-    emc.EMC_SPINDLE_ON: MotionController._spindle,
-    emc.EMC_SPINDLE_OFF: MotionController._spindle,
-    emc.EMC_SPINDLE_BRAKE_ENGAGE: MotionController._spindle,
-    emc.EMC_SPINDLE_BRAKE_RELEASE: MotionController._spindle,
-    emc.EMC_TRAJ_SET_SPINDLE_SCALE: MotionController._spindle_scale,
-    emc.EMC_SPINDLE_SPEED: MotionController._spindle,
-    emc.EMC_SPINDLE_INCREASE: MotionController._spindle,
-    emc.EMC_SPINDLE_DECREASE: MotionController._spindle,
-    emc.EMC_TRAJ_SET_SPINDLESYNC: MotionController._spindle_sync,
-    emc.EMC_TRAJ_RIGID_TAP: MotionController._rigid_tap,
-    emc.EMC_SPINDLE_ORIENT: MotionController._spindle,
-    emc.EMC_SPINDLE_WAIT_ORIENT_COMPLETE: MotionController._spindle,
-    emc.EMC_TRAJ_SET_OFFSET: MotionController._settings,
-    emc.EMC_TRAJ_SET_FO_ENABLE: MotionController._settings,
-    emc.EMC_TRAJ_SET_SO_ENABLE: MotionController._settings,
-    emc.EMC_TRAJ_SET_FH_ENABLE: MotionController._settings,
-    emc.EMC_MOTION_ADAPTIVE: MotionController._settings,
-}
 # What ends a program whose move motion refused: task's abort, or a fresh start (motion
 # turned off or on, another mode).
 _ENDS_A_REFUSED_PROGRAM = {
@@ -1417,4 +997,17 @@ _ENDS_A_REFUSED_PROGRAM = {
     emc.EMC_TRAJ_SET_MODE,
 }
 
-__all__ = ["Inputs", "Joint", "MotionController"]
+# (the parts' names, for the modules that take them from here)
+__all__ = [
+    "COORD",
+    "FREE",
+    "QUEUE_FULL_MARGIN",
+    "TELEOP",
+    "Inputs",
+    "Joint",
+    "MotionController",
+    "OrientState",
+    "Spindle",
+    "SpindleInputs",
+    "WheelInputs",
+]

@@ -44,8 +44,8 @@ from motion.safety import DEFAULT_HEARTBEAT_TIMEOUT_S, MotionSafety
 from motion.tp import load_planner
 from nml import emc
 from nml.channels import EMC_ERROR, MOTION_COMMAND, MOTION_STATUS, Nml, load_config
+from nml.commands import InternalError, Refused, carry_out, echo, internal_error
 from nml.errors import NmlError, NmlTimeoutError
-from nml.message import RCS_STATUS
 
 NML_PROCESS = "motion"
 # The command handler takes commands while the next one, costing as much as the longest
@@ -318,20 +318,21 @@ class Motmod:
                 continue
             if cmd is None:
                 break
-            try:
-                problem = self.controller.handle(cmd)
-            except Exception as exc:  # (a bug, or a value nothing refused: see _internal_error)
-                self._internal_error(f"in {cmd.NAME}", exc)
-                problem = ""  # refused; the fault says why
-            status = self.status
-            status.command_type = cmd.TYPE
-            status.echo_serial_number = cmd.serial_number
-            status.status = RCS_STATUS.DONE if problem is None else RCS_STATUS.ERROR
-            if problem:  # ("": refused without a word, see MotionController.handle)
-                self.pending_errors.extend(problem.splitlines())
+            answer = carry_out("motion", self._carry_out, cmd)
+            echo(self.status, cmd, answer.status)
+            if isinstance(answer.refusal, InternalError):  # a bug: motion off, said once
+                self.controller.fault(f"{answer.refusal}; motion is off")
+            elif answer.reason:
+                self.pending_errors.extend(answer.reason.splitlines())
             ended = clock()
             longest = max(longest, ended - started)
             started = ended
+
+    def _carry_out(self, cmd: emc.NMLmsg) -> None:
+        """The controller's answer as a refusal ("": quietly, see MotionController.handle)."""
+        problem = self.controller.handle(cmd)
+        if problem is not None:
+            raise Refused(problem, is_quiet=not problem)
 
     def controller_period(self, period: int) -> None:
         """One servo period: safety board, pins in, controller, pins out, status out
@@ -443,9 +444,7 @@ class Motmod:
         it is, the queue is emptied) and an error saying so. The host would otherwise
         disable the function that raised it: motion would stop listening, or stop running,
         and nobody would be told."""
-        self.controller.fault(
-            f"motion: internal error {where}: {type(exc).__name__}: {exc}; motion is off"
-        )
+        self.controller.fault(f"{internal_error('motion', where, exc)}; motion is off")
 
     def _write_pins(self) -> None:
         """Pins out. Values that change while moving are written every period; the rest

@@ -6,8 +6,10 @@ import math
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 
-AXIS_LETTERS = "xyzabcuvw"
-NUM_AXES = len(AXIS_LETTERS)
+from nml.axes import AXIS_LETTERS as _LETTERS
+from nml.axes import NUM_AXES as NUM_AXES
+
+AXIS_LETTERS = _LETTERS.lower()  # (the names of EmcPose's fields)
 
 
 @dataclass(slots=True)

@@ -7,8 +7,9 @@ fields motion reports are grouped into *runs* of consecutive fields of the recor
 layout, each written by one ``struct.pack_into`` of its leaf values in layout order (a
 pose as its nine numbers). That is 3x faster than a numpy structured assignment once the
 caches are cold, as they are at the start of each period. ``MotionStatusRuns`` makes the
-runs of one status record once; the controller fills them every period
-(``MotionController.fill_status``).
+runs of one status record once; ``StatusFilling.fill_status``, a part of
+``MotionController`` (motion/controller.py), fills them every period from the
+controller's state.
 
 Fields motion does not own are outside every run and keep their value: ``linearUnits``,
 ``angularUnits``, ``probeval``, ``tag``, the joints' soft-limit flags, the axis records and
@@ -18,12 +19,19 @@ the RCS header (``command_type``, ``echo_serial_number``, ``status``: the comman
 from __future__ import annotations
 
 import functools
+import math
 import struct
 
 import numpy as np
 
+from motion.modes import COORD
+from motion.pose import NUM_AXES
 from nml import emc
 from nml.message import _flat_codes  # nml's dtype -> struct codes, so both agree
+
+# traj.queueFull is reported while fewer planner slots than this are free (like LinuxCNC's
+# TC_QUEUE_MARGIN), so moves task has already sent still fit (see task's MAX_MOTION_IN_FLIGHT)
+QUEUE_FULL_MARGIN = 200
 
 # The runs, in layout order (a run must name consecutive fields; checked when made).
 TRAJ_STATE = (
@@ -113,3 +121,115 @@ class MotionStatusRuns:
             if new != self._io_written[index]:
                 array[: len(new)] = new
                 self._io_written[index] = list(new)
+
+
+class StatusFilling:
+    """The controller's state, written into its EMC_MOTION_STAT every period."""
+
+    _status_runs: MotionStatusRuns | None  # of the last fill_status's record
+
+    def fill_status(self, stat: emc.EMC_MOTION_STAT) -> None:
+        """Write the controller's state into an EMC_MOTION_STAT (MOT-066..071), in place
+        and in a few assignments (motion/status.py): motmod calls this every period."""
+        runs = self._status_runs
+        if runs is None or runs.stat is not stat:
+            runs = self._status_runs = MotionStatusRuns(stat, len(self.joints), len(self.spindles))
+        tp = self.tp
+        is_coord = self.mode == COORD
+        is_enabled = self.is_enabled
+        move = tp.current_move if is_coord else None
+        runs.traj_state.write(
+            self.period_s,  # cycleTime
+            len(self.joints),
+            len(self.spindles),
+            getattr(self.kins, "axis_mask", 0b111),
+            self.mode,
+            is_enabled,
+            self.is_in_position,  # inpos
+            tp.queue_depth,  # queue
+            tp.active_queue if is_coord else 0,  # activeQueue
+            tp.free_slots < QUEUE_FULL_MARGIN,  # queueFull
+            tp.motion_id,  # id
+            tp.is_paused,
+            tp.feed_scale,  # scale
+            tp.rapid_scale,
+            *self.carte_pos_cmd.as_tuple(),  # position
+            *self.carte_pos_fb.as_tuple(),  # actualPosition
+            self.traj_vel,  # velocity
+            self.traj_acc,  # acceleration
+            _finite_or_zero(self.max_vel),  # maxVelocity
+            _finite_or_zero(self.max_acc),  # maxAcceleration
+            *tp.probe_pos.tolist(),  # probedPosition
+            tp.probe_tripped,
+            move is not None and move.probe is not None,  # probing
+        )
+        runs.traj_path.write(
+            int(self.kins.kinematics_type()),
+            _motion_type(move),
+            tp.distance_to_go if is_coord else 0.0,
+            *(tp.dtg.tolist() if is_coord else _ZERO_POSE),  # dtg
+            self.current_vel,
+            self.is_feed_override_enabled,
+            self.is_adaptive_feed_enabled,
+            self.is_feed_hold_enabled,
+        )
+        is_override_limits = self.is_override_limits
+        for joint, fault, out, switches in zip(
+            self.joints, self.is_faulted, runs.joints, runs.joint_switches, strict=True
+        ):
+            out.write(
+                joint.backlash,
+                _finite_or_zero(joint.min_limit),  # minPositionLimit
+                _finite_or_zero(joint.max_limit),  # maxPositionLimit
+                _finite_or_zero(joint.ferror_limit),  # maxFerror
+                _finite_or_zero(joint.min_ferror_limit),  # minFerror
+                joint.ferror,  # ferrorCurrent
+                joint.ferror_high_mark,
+                joint.pos_cmd,  # output
+                joint.pos_fb,  # input
+                joint.vel_cmd,  # velocity
+                not joint.planner.is_active,  # inpos
+                bool(joint.is_homing),  # (bool: set by the homing module, maybe a user's)
+                bool(joint.is_homed),
+                fault,
+                is_enabled,
+            )
+            switches.write(joint.is_on_neg_limit, joint.is_on_pos_limit, is_override_limits)
+        for spindle, out in zip(self.spindles, runs.spindles, strict=True):
+            speed = spindle.speed
+            is_on = speed != 0
+            out.write(
+                is_on,  # state
+                speed,
+                spindle.scale,  # spindle_scale
+                abs(speed) if spindle.css_factor else 0.0,  # css_maximum
+                spindle.css_factor,
+                (speed > 0) - (speed < 0),  # direction
+                spindle.is_brake_on,  # brake
+                spindle.increasing,
+                is_on,  # enabled
+                spindle.orient_state,
+                spindle.orient_fault,
+                spindle.is_override_enabled,
+                False,  # homed: spindles are not homed (LinuxCNC reports the same)
+            )
+        runs.write_io(self.digital_out, self.digital_in, self.analog_out, self.analog_in)
+
+
+def _motion_type(move) -> int:
+    """EMC_TRAJ_STAT.motion_type of the move being executed (0: none)."""
+    if move is None:
+        return 0
+    if move.probe is not None:
+        return emc.EMC_MOTION_TYPE.PROBING
+    if move.is_rapid:
+        return emc.EMC_MOTION_TYPE.TRAVERSE
+    is_straight = move.line is not None or move.rigid_tap is not None
+    return emc.EMC_MOTION_TYPE.FEED if is_straight else emc.EMC_MOTION_TYPE.ARC
+
+
+def _finite_or_zero(value: float) -> float:
+    return value if math.isfinite(value) else 0.0
+
+
+_ZERO_POSE = (0.0,) * NUM_AXES

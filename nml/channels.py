@@ -14,7 +14,7 @@ from nml import config as nml_config
 from nml.codec import Encoding, max_encoded_size
 from nml.config import BufferConfig, NmlConfig
 from nml.errors import NmlAccessError
-from nml.message import MessageKind, NMLmsg
+from nml.message import MessageKind, NMLmsg, Receiver
 from nml.registry import REGISTRY
 from nml.shmem import ShmBuffer
 
@@ -36,13 +36,18 @@ def _is_catalogue(cls: type[NMLmsg]) -> bool:
 
 
 def is_motion_type(type_id: int) -> bool:
-    """Commands motion carries out: JOINT, JOG, TRAJ, MOTION (1xx..3xx) and SPINDLE (13xx)."""
-    return 100 <= type_id < 400 or 1300 <= type_id < 1400
+    """Commands motion carries out (declared ``receiver=Receiver.MOTION``)."""
+    return _receiver_of(type_id) is Receiver.MOTION
 
 
 def is_io_type(type_id: int) -> bool:
-    """Commands iocontrol carries out: TOOL, AUX, COOLANT, LUBE, IO (11xx..16xx but 13xx)."""
-    return 1100 <= type_id < 1700 and not is_motion_type(type_id)
+    """Commands iocontrol carries out (declared ``receiver=Receiver.IO``)."""
+    return _receiver_of(type_id) is Receiver.IO
+
+
+def _receiver_of(type_id: int) -> Receiver | None:
+    cls = REGISTRY.by_type(type_id)
+    return None if cls is None else cls.RECEIVER
 
 
 def messages_of(buffer_name: str) -> list[type[NMLmsg]]:
@@ -55,9 +60,9 @@ def messages_of(buffer_name: str) -> list[type[NMLmsg]]:
         EMC_COMMAND: commands,
         EMC_STATUS: [c for c in (by_name("EMC_STAT"),) if c],
         EMC_ERROR: [c for c in REGISTRY.of_kind(MessageKind.OPERATOR) if _is_catalogue(c)],
-        TOOL_COMMAND: [c for c in commands if is_io_type(c.TYPE)],
+        TOOL_COMMAND: [c for c in commands if c.RECEIVER is Receiver.IO],
         TOOL_STATUS: [c for c in (by_name("EMC_IO_STAT"),) if c],
-        MOTION_COMMAND: [c for c in commands if is_motion_type(c.TYPE)],
+        MOTION_COMMAND: [c for c in commands if c.RECEIVER is Receiver.MOTION],
         MOTION_STATUS: [c for c in (by_name("EMC_MOTION_STAT"),) if c],
     }
     return table.get(buffer_name, [])

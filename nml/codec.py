@@ -21,10 +21,8 @@ import msgpack
 import numpy as np
 
 from nml.errors import NmlFormatError
-from nml.message import NMLmsg
+from nml.message import HEADER, NMLmsg
 from nml.registry import REGISTRY
-
-HEADER = struct.Struct("<iIII")  # type, payload length, layout crc, encoding
 
 
 class Encoding(enum.IntEnum):

@@ -30,6 +30,8 @@ from nml.message import (
     RCS_CMD_MSG,
     RCS_STAT_MSG,
     MessageKind,
+    Receiver,
+    Requires,
     Struct,
     array,
     boolean,
@@ -97,6 +99,10 @@ class EMC_TASK_STATE_ENUM(enum.IntEnum):
     ESTOP_RESET = 2
     OFF = 3
     ON = 4
+
+
+# What manual motion (jogs, homing, the teleop vector) needs of task (``requires=``)
+ON_IN_MANUAL = Requires(state=EMC_TASK_STATE_ENUM.ON, mode=EMC_TASK_MODE_ENUM.MANUAL)
 
 
 class EMC_TASK_EXEC_ENUM(enum.IntEnum):
@@ -367,17 +373,21 @@ class CANON_TOOL_TABLE(Struct):
 # Text for the operator, queued on the error channel (emcError) and shown by every GUI.
 
 
-class EMC_OPERATOR_ERROR(RCS_CMD_MSG, type_id=11, kind=MessageKind.OPERATOR):
+class EMC_OPERATOR_ERROR(
+    RCS_CMD_MSG, type_id=11, kind=MessageKind.OPERATOR, receiver=Receiver.TASK
+):
     id: i32
     error: string(LINELEN)
 
 
-class EMC_OPERATOR_TEXT(RCS_CMD_MSG, type_id=12, kind=MessageKind.OPERATOR):
+class EMC_OPERATOR_TEXT(RCS_CMD_MSG, type_id=12, kind=MessageKind.OPERATOR, receiver=Receiver.TASK):
     id: i32
     text: string(LINELEN)
 
 
-class EMC_OPERATOR_DISPLAY(RCS_CMD_MSG, type_id=13, kind=MessageKind.OPERATOR):
+class EMC_OPERATOR_DISPLAY(
+    RCS_CMD_MSG, type_id=13, kind=MessageKind.OPERATOR, receiver=Receiver.TASK
+):
     id: i32
     display: string(LINELEN)
 
@@ -385,7 +395,7 @@ class EMC_OPERATOR_DISPLAY(RCS_CMD_MSG, type_id=13, kind=MessageKind.OPERATOR):
 # ============================================================================ JOINT (NML-057)
 
 
-class EMC_JOINT_CMD_MSG(RCS_CMD_MSG):
+class EMC_JOINT_CMD_MSG(RCS_CMD_MSG, receiver=Receiver.MOTION):
     """Configuration and control of one joint (``joint`` is its number), via task to motion."""
 
     joint: i32
@@ -467,7 +477,7 @@ class EMC_JOINT_ENABLE(EMC_JOINT_CMD_MSG, type_id=121): ...
 class EMC_JOINT_DISABLE(EMC_JOINT_CMD_MSG, type_id=122): ...
 
 
-class EMC_JOINT_HOME(EMC_JOINT_CMD_MSG, type_id=123): ...
+class EMC_JOINT_HOME(EMC_JOINT_CMD_MSG, type_id=123, requires=ON_IN_MANUAL): ...
 
 
 class EMC_JOINT_ACTIVATE(EMC_JOINT_CMD_MSG, type_id=127): ...
@@ -488,7 +498,7 @@ class EMC_JOINT_SET_BACKLASH(EMC_JOINT_CMD_MSG, type_id=134):
     backlash: f64
 
 
-class EMC_JOINT_UNHOME(EMC_JOINT_CMD_MSG, type_id=135): ...
+class EMC_JOINT_UNHOME(EMC_JOINT_CMD_MSG, type_id=135, requires=ON_IN_MANUAL): ...
 
 
 class EMC_JOINT_STAT_MSG(RCS_STAT_MSG):
@@ -529,7 +539,7 @@ class EMC_AXIS_STAT_MSG(RCS_STAT_MSG):
     axis: i32
 
 
-class EMC_AXIS_CMD_MSG(RCS_CMD_MSG):
+class EMC_AXIS_CMD_MSG(RCS_CMD_MSG, receiver=Receiver.MOTION):
     """Configuration of one world axis (``axis`` 0..8 for X..W), from [AXIS_L] via task.
     LinuxCNC 2.9 passes these through motion's shared memory; here they are NML messages,
     numbered in the free 14x block of the joint/axis group."""
@@ -562,7 +572,7 @@ class EMC_AXIS_STAT(EMC_AXIS_STAT_MSG, type_id=199):
 # ============================================================================ JOG (NML-059)
 
 
-class EMC_JOG_CMD_MSG(RCS_CMD_MSG):
+class EMC_JOG_CMD_MSG(RCS_CMD_MSG, receiver=Receiver.MOTION, requires=ON_IN_MANUAL):
     """Manual jogging of a joint (``jjogmode`` JOG_MODE.JOINT) or a world axis (TELEOP)."""
 
     joint_or_axis: i32
@@ -597,7 +607,7 @@ class EMC_JOG_STOP(EMC_JOG_CMD_MSG, type_id=136):
 # ============================================================================ TRAJ (NML-060)
 
 
-class EMC_TRAJ_CMD_MSG(RCS_CMD_MSG):
+class EMC_TRAJ_CMD_MSG(RCS_CMD_MSG, receiver=Receiver.MOTION):
     """The trajectory planner: settings, queued moves and program flow.
 
     ``tag`` carries the interpreter state of the program line a command comes from.
@@ -672,7 +682,7 @@ class EMC_TRAJ_STEP(EMC_TRAJ_CMD_MSG, type_id=217): ...
 class EMC_TRAJ_RESUME(EMC_TRAJ_CMD_MSG, type_id=218): ...
 
 
-class EMC_TRAJ_DELAY(EMC_TRAJ_CMD_MSG, type_id=219):
+class EMC_TRAJ_DELAY(EMC_TRAJ_CMD_MSG, type_id=219, receiver=Receiver.TASK):
     delay: f64  # seconds
 
 
@@ -705,11 +715,11 @@ class EMC_TRAJ_SET_TERM_COND(EMC_TRAJ_CMD_MSG, type_id=222):
     tolerance: f64  # allowed path deviation when blending
 
 
-class EMC_TRAJ_SET_OFFSET(EMC_TRAJ_CMD_MSG, type_id=223):
+class EMC_TRAJ_SET_OFFSET(EMC_TRAJ_CMD_MSG, type_id=223, waits_for_motion=True):
     offset: EmcPose
 
 
-class EMC_TRAJ_SET_G5X(EMC_TRAJ_CMD_MSG, type_id=224):
+class EMC_TRAJ_SET_G5X(EMC_TRAJ_CMD_MSG, type_id=224, receiver=Receiver.TASK):
     g5x_index: i32
     origin: EmcPose
 
@@ -718,18 +728,18 @@ class EMC_TRAJ_SET_HOME(EMC_TRAJ_CMD_MSG, type_id=225):
     home: EmcPose
 
 
-class EMC_TRAJ_SET_ROTATION(EMC_TRAJ_CMD_MSG, type_id=226):
+class EMC_TRAJ_SET_ROTATION(EMC_TRAJ_CMD_MSG, type_id=226, receiver=Receiver.TASK):
     rotation: f64
 
 
-class EMC_TRAJ_SET_G92(EMC_TRAJ_CMD_MSG, type_id=227):
+class EMC_TRAJ_SET_G92(EMC_TRAJ_CMD_MSG, type_id=227, receiver=Receiver.TASK):
     origin: EmcPose
 
 
-class EMC_TRAJ_CLEAR_PROBE_TRIPPED_FLAG(EMC_TRAJ_CMD_MSG, type_id=228): ...
+class EMC_TRAJ_CLEAR_PROBE_TRIPPED_FLAG(EMC_TRAJ_CMD_MSG, type_id=228, waits_for_motion=True): ...
 
 
-class EMC_TRAJ_PROBE(EMC_TRAJ_CMD_MSG, type_id=229):
+class EMC_TRAJ_PROBE(EMC_TRAJ_CMD_MSG, type_id=229, waits_for_motion=True):
     pos: EmcPose
     type: i32
     vel: f64
@@ -739,11 +749,16 @@ class EMC_TRAJ_PROBE(EMC_TRAJ_CMD_MSG, type_id=229):
     id: i32  # motion id (the line motion reports); 0: the last EMC_TRAJ_SET_MOTION_ID's
 
 
-class EMC_TRAJ_SET_TELEOP_ENABLE(EMC_TRAJ_CMD_MSG, type_id=230):
+class EMC_TRAJ_SET_TELEOP_ENABLE(
+    EMC_TRAJ_CMD_MSG,
+    type_id=230,
+    receiver=Receiver.TASK,
+    requires=Requires(mode=EMC_TASK_MODE_ENUM.MANUAL),
+):
     enable: i32
 
 
-class EMC_TRAJ_SET_TELEOP_VECTOR(EMC_TRAJ_CMD_MSG, type_id=231):
+class EMC_TRAJ_SET_TELEOP_VECTOR(EMC_TRAJ_CMD_MSG, type_id=231, requires=ON_IN_MANUAL):
     """LinuxCNC 2.7's (2.9 dropped it, MOT-013): the cartesian velocity teleop mode
     follows, per axis in machine units per second (MOT-016, MOT-055)."""
 
@@ -774,7 +789,7 @@ class EMC_TRAJ_SET_FH_ENABLE(EMC_TRAJ_CMD_MSG, type_id=236):
     mode: u8  # 0: feed hold disabled
 
 
-class EMC_TRAJ_RIGID_TAP(EMC_TRAJ_CMD_MSG, type_id=237):
+class EMC_TRAJ_RIGID_TAP(EMC_TRAJ_CMD_MSG, type_id=237, waits_for_motion=True):
     pos: EmcPose
     vel: f64
     ini_maxvel: f64
@@ -841,20 +856,20 @@ class EMC_TRAJ_STAT(EMC_TRAJ_STAT_MSG, type_id=299):
 # ============================================================================ SPINDLE (NML-065)
 
 
-class EMC_SPINDLE_CMD_MSG(RCS_CMD_MSG):
+class EMC_SPINDLE_CMD_MSG(RCS_CMD_MSG, receiver=Receiver.MOTION):
     """Spindle control; ``spindle`` is the spindle's number (0..EMCMOT_MAX_SPINDLES-1)."""
 
     spindle: i32
 
 
-class EMC_SPINDLE_ON(EMC_SPINDLE_CMD_MSG, type_id=1304):
+class EMC_SPINDLE_ON(EMC_SPINDLE_CMD_MSG, type_id=1304, waits_for_motion=True):
     speed: f64  # rpm, or the maximum rpm in constant surface speed mode
     factor: f64  # constant surface speed numerator; 0 for a fixed rpm
     xoffset: f64
     wait_for_spindle_at_speed: i32 = 1
 
 
-class EMC_SPINDLE_OFF(EMC_SPINDLE_CMD_MSG, type_id=1305):
+class EMC_SPINDLE_OFF(EMC_SPINDLE_CMD_MSG, type_id=1305, waits_for_motion=True):
     wait_for_spindle_at_speed: i32
 
 
@@ -876,18 +891,18 @@ class EMC_SPINDLE_BRAKE_RELEASE(EMC_SPINDLE_CMD_MSG, type_id=1312): ...
 class EMC_SPINDLE_BRAKE_ENGAGE(EMC_SPINDLE_CMD_MSG, type_id=1313): ...
 
 
-class EMC_SPINDLE_SPEED(EMC_SPINDLE_CMD_MSG, type_id=1316):
+class EMC_SPINDLE_SPEED(EMC_SPINDLE_CMD_MSG, type_id=1316, waits_for_motion=True):
     speed: f64
     factor: f64
     xoffset: f64
 
 
-class EMC_SPINDLE_ORIENT(EMC_SPINDLE_CMD_MSG, type_id=1317):
+class EMC_SPINDLE_ORIENT(EMC_SPINDLE_CMD_MSG, type_id=1317, waits_for_motion=True):
     orientation: f64  # degrees
     mode: i32
 
 
-class EMC_SPINDLE_WAIT_ORIENT_COMPLETE(EMC_SPINDLE_CMD_MSG, type_id=1318):
+class EMC_SPINDLE_WAIT_ORIENT_COMPLETE(EMC_SPINDLE_CMD_MSG, type_id=1318, waits_for_motion=True):
     timeout: f64  # seconds
 
 
@@ -913,7 +928,7 @@ class EMC_SPINDLE_STAT(EMC_SPINDLE_STAT_MSG, type_id=1399):
 # ============================================================================ MOTION (NML-061)
 
 
-class EMC_MOTION_CMD_MSG(RCS_CMD_MSG):
+class EMC_MOTION_CMD_MSG(RCS_CMD_MSG, receiver=Receiver.MOTION):
     """The motion controller as a whole; its status aggregates traj, joints, axes, spindles."""
 
 
@@ -932,6 +947,11 @@ class EMC_MOTION_SET_AOUT(EMC_MOTION_CMD_MSG, type_id=304):
     end: f64
     now: u8  # 1: set at once; 0: with the next move
 
+    def waits_for_motion(self) -> bool:
+        """M64/M65/M68 (``now``) wait for the moves before them; M62/M63/M67 go with the
+        next move into motion's queue."""
+        return bool(self.now)
+
 
 class EMC_MOTION_SET_DOUT(EMC_MOTION_CMD_MSG, type_id=305):
     index: u8
@@ -939,8 +959,13 @@ class EMC_MOTION_SET_DOUT(EMC_MOTION_CMD_MSG, type_id=305):
     end: u8
     now: u8
 
+    def waits_for_motion(self) -> bool:
+        """M64/M65/M68 (``now``) wait for the moves before them; M62/M63/M67 go with the
+        next move into motion's queue."""
+        return bool(self.now)
 
-class EMC_MOTION_ADAPTIVE(EMC_MOTION_CMD_MSG, type_id=306):
+
+class EMC_MOTION_ADAPTIVE(EMC_MOTION_CMD_MSG, type_id=306, waits_for_motion=True):
     status: u8  # 1 start, 0 stop
 
 
@@ -969,7 +994,7 @@ class EMC_MOTION_STAT(EMC_MOTION_STAT_MSG, type_id=399):
 # ============================================================================ TASK (NML-062)
 
 
-class EMC_TASK_CMD_MSG(RCS_CMD_MSG):
+class EMC_TASK_CMD_MSG(RCS_CMD_MSG, receiver=Receiver.TASK):
     """Task: mode, machine state, program and MDI execution."""
 
 
@@ -998,14 +1023,22 @@ class EMC_TASK_PLAN_OPEN(EMC_TASK_CMD_MSG, type_id=506):
     file: string(LINELEN)
 
 
-class EMC_TASK_PLAN_RUN(EMC_TASK_CMD_MSG, type_id=507):
+class EMC_TASK_PLAN_RUN(
+    EMC_TASK_CMD_MSG,
+    type_id=507,
+    requires=Requires(state=EMC_TASK_STATE_ENUM.ON, mode=EMC_TASK_MODE_ENUM.AUTO),
+):
     line: i32  # first line to run; 0 and 1 both mean the start
 
 
 class EMC_TASK_PLAN_READ(EMC_TASK_CMD_MSG, type_id=508): ...
 
 
-class EMC_TASK_PLAN_EXECUTE(EMC_TASK_CMD_MSG, type_id=509):
+class EMC_TASK_PLAN_EXECUTE(
+    EMC_TASK_CMD_MSG,
+    type_id=509,
+    requires=Requires(state=EMC_TASK_STATE_ENUM.ON, mode=EMC_TASK_MODE_ENUM.MDI),
+):
     command: string(LINELEN)
 
 
@@ -1084,7 +1117,7 @@ class EMC_TASK_STAT(EMC_TASK_STAT_MSG, type_id=599):
 # ============================================================================ TOOL (NML-063)
 
 
-class EMC_TOOL_CMD_MSG(RCS_CMD_MSG):
+class EMC_TOOL_CMD_MSG(RCS_CMD_MSG, receiver=Receiver.IO, waits_for_motion=True):
     """The tool change handshake with iocontrol, and the tool table.
 
     The tool table is not part of the status (as in LinuxCNC 2.9, it lives in the tool data
@@ -1146,7 +1179,7 @@ class EMC_TOOL_STAT(EMC_TOOL_STAT_MSG, type_id=1199):
 # ============================================================================ AUX (NML-064)
 
 
-class EMC_AUX_CMD_MSG(RCS_CMD_MSG):
+class EMC_AUX_CMD_MSG(RCS_CMD_MSG, receiver=Receiver.IO, waits_for_motion=True):
     """Emergency stop, and waiting on an input (M66)."""
 
 
@@ -1159,7 +1192,9 @@ class EMC_AUX_ESTOP_OFF(EMC_AUX_CMD_MSG, type_id=1207): ...
 class EMC_AUX_ESTOP_RESET(EMC_AUX_CMD_MSG, type_id=1208): ...
 
 
-class EMC_AUX_INPUT_WAIT(EMC_AUX_CMD_MSG, type_id=1209):
+class EMC_AUX_INPUT_WAIT(
+    EMC_AUX_CMD_MSG, type_id=1209, receiver=Receiver.TASK, waits_for_motion=False
+):
     index: i32
     input_type: i32  # INPUT_TYPE
     wait_type: i32  # WAIT_MODE
@@ -1176,7 +1211,7 @@ class EMC_AUX_STAT(EMC_AUX_STAT_MSG, type_id=1299):
 # ============================================================================ COOLANT (NML-066)
 
 
-class EMC_COOLANT_CMD_MSG(RCS_CMD_MSG):
+class EMC_COOLANT_CMD_MSG(RCS_CMD_MSG, receiver=Receiver.IO, waits_for_motion=True):
     """Mist (M7) and flood (M8) coolant, both off with M9."""
 
 
@@ -1203,7 +1238,7 @@ class EMC_COOLANT_STAT(EMC_COOLANT_STAT_MSG, type_id=1499):
 # ============================================================================ LUBE (NML-067)
 
 
-class EMC_LUBE_CMD_MSG(RCS_CMD_MSG):
+class EMC_LUBE_CMD_MSG(RCS_CMD_MSG, receiver=Receiver.IO, waits_for_motion=True):
     """The lubrication pump."""
 
 
@@ -1225,7 +1260,7 @@ class EMC_LUBE_STAT(EMC_LUBE_STAT_MSG, type_id=1599):
 # EMC_IO_PLUGIN_CALL is declared with the top-level messages (its base is EMC_CMD_MSG).
 
 
-class EMC_IO_CMD_MSG(RCS_CMD_MSG):
+class EMC_IO_CMD_MSG(RCS_CMD_MSG, receiver=Receiver.IO, waits_for_motion=True):
     """iocontrol as a whole; its status aggregates tool, coolant, aux and lube."""
 
 
@@ -1269,7 +1304,7 @@ class EMC_SET_DEBUG(RCS_CMD_MSG, type_id=22):
     debug: i32  # EMC_DEBUG bits
 
 
-class EMC_SYSTEM_CMD(RCS_CMD_MSG, type_id=30):
+class EMC_SYSTEM_CMD(RCS_CMD_MSG, type_id=30, receiver=Receiver.TASK):
     string: string(EMC_SYSTEM_CMD_LEN)
 
 
@@ -1277,12 +1312,12 @@ class EMC_CMD_MSG(RCS_CMD_MSG):
     """Commands for the whole controller."""
 
 
-class EMC_EXEC_PLUGIN_CALL(EMC_CMD_MSG, type_id=1112):
+class EMC_EXEC_PLUGIN_CALL(EMC_CMD_MSG, type_id=1112, receiver=Receiver.IO, waits_for_motion=True):
     len: i32
     call: string(EMC_PLUGIN_CALL_LEN)
 
 
-class EMC_IO_PLUGIN_CALL(EMC_CMD_MSG, type_id=1113):
+class EMC_IO_PLUGIN_CALL(EMC_CMD_MSG, type_id=1113, receiver=Receiver.IO, waits_for_motion=True):
     len: i32
     call: string(EMC_PLUGIN_CALL_LEN)
 

@@ -33,6 +33,8 @@ from typing import Annotated, Any, ClassVar, get_args, get_origin, get_type_hint
 
 import numpy as np
 
+from nml.registry import REGISTRY
+
 # ----------------------------------------------------------------------------- field markers
 
 
@@ -446,6 +448,10 @@ def _fill(cls: type[Struct], arr: np.ndarray, values: dict[str, Any]) -> None:
 # ----------------------------------------------------------------------------- messages
 
 
+# The header of every encoded message (nml/codec.py): type, payload length, layout crc, encoding
+HEADER = struct.Struct("<iIII")
+
+
 class MessageKind(enum.Enum):
     COMMAND = "command"
     STATUS = "status"
@@ -453,25 +459,71 @@ class MessageKind(enum.Enum):
     OTHER = "other"
 
 
+class Receiver(enum.Enum):
+    """The process that carries a command out (task routes every other one there)."""
+
+    TASK = "task"
+    MOTION = "motion"
+    IO = "iocontrol"
+
+
+@dataclass(frozen=True)
+class Requires:
+    """What a command needs of task before it is carried out: the machine state and the
+    task mode (``EMC_TASK_STATE_ENUM`` / ``EMC_TASK_MODE_ENUM`` values; None: any)."""
+
+    state: int | None = None
+    mode: int | None = None
+
+
 class NMLmsg(Struct):
-    """Base of every message. ``TYPE`` is the NML type number, ``NAME`` its symbol."""
+    """Base of every message. ``TYPE`` is the NML type number, ``NAME`` its symbol.
+
+    A command also says, beside its fields (class keywords, inherited by subclasses), what
+    routing and preconditions are derived from (``nml/commands.py``):
+
+    - ``receiver``: the process that carries it out (``Receiver``; None: nobody);
+    - ``waits_for_motion``: a queue buster: in a program it goes out only once everything
+      queued before it is done (``waits_for_motion()`` may decide per message), as
+      LinuxCNC's task preconditions have it: the spindle never changes in the middle of a
+      cut, a probe or rigid tap never blends with what came before, a tool change starts
+      at rest (moves and their settings go straight into motion's queue);
+    - ``requires``: the machine state and task mode it needs (``Requires``).
+    """
 
     TYPE: ClassVar[int] = 0
     NAME: ClassVar[str] = "NMLmsg"
     KIND: ClassVar[MessageKind] = MessageKind.OTHER
+    RECEIVER: ClassVar[Receiver | None] = None
+    IS_QUEUE_BUSTER: ClassVar[bool] = False
+    REQUIRES: ClassVar[Requires | None] = None
 
     def __init_subclass__(
-        cls, type_id: int | None = None, kind: MessageKind | None = None, **kwargs: Any
+        cls,
+        type_id: int | None = None,
+        kind: MessageKind | None = None,
+        receiver: Receiver | None = None,
+        waits_for_motion: bool | None = None,
+        requires: Requires | None = None,
+        **kwargs: Any,
     ) -> None:
         super().__init_subclass__(**kwargs)
         if kind is not None:
             cls.KIND = kind
+        if receiver is not None:
+            cls.RECEIVER = receiver
+        if waits_for_motion is not None:
+            cls.IS_QUEUE_BUSTER = waits_for_motion
+        if requires is not None:
+            cls.REQUIRES = requires
         if type_id is not None:
-            from nml.registry import REGISTRY
-
             cls.TYPE = type_id
             cls.NAME = cls.__name__
             REGISTRY.register(cls)
+
+    def waits_for_motion(self) -> bool:
+        """Whether, in a program, this goes out only once all before it is done."""
+        return self.IS_QUEUE_BUSTER
 
     @property
     def type(self) -> int:
@@ -481,8 +533,6 @@ class NMLmsg(Struct):
     @property
     def size(self) -> int:
         """Bytes of the fixed encoding, header included (LinuxCNC's NMLmsg::size)."""
-        from nml.codec import HEADER
-
         return HEADER.size + self.dtype.itemsize
 
 

@@ -44,11 +44,10 @@ from nml.channels import (
     TOOL_COMMAND,
     TOOL_STATUS,
     Nml,
-    is_io_type,
-    is_motion_type,
 )
+from nml.commands import RUNNING, Handlers, Refused, carry_out, echo, handler, internal_error, unmet
 from nml.errors import NmlError
-from nml.message import RCS_STATUS, MessageKind
+from nml.message import RCS_STATUS, MessageKind, Receiver, Requires
 from nml.outbox import Outbox
 from nml.safety import SafetyLink
 from nml.shmem import LOCK_HELD_REPORT_S
@@ -213,26 +212,7 @@ class Task:
         self.stuck_command_writer = 0  # the pid last reported holding emcCommand's lock
         self.bad_buffer_quiet_until = 0.0
         self.bad_buffer_reports = 0
-        self.handlers: dict[type, Callable[[emc.NMLmsg], str | bool | None]] = {
-            emc.EMC_TASK_SET_STATE: self._set_state,
-            emc.EMC_TASK_SET_MODE: self._set_mode,
-            emc.EMC_TASK_PLAN_EXECUTE: self._mdi,
-            emc.EMC_TASK_PLAN_OPEN: self._open,
-            emc.EMC_TASK_PLAN_RUN: self._run_program,
-            emc.EMC_TASK_PLAN_PAUSE: self._pause,
-            emc.EMC_TASK_PLAN_RESUME: self._resume,
-            emc.EMC_TASK_PLAN_STEP: self._step,
-            emc.EMC_TASK_ABORT: self._abort_command,
-            emc.EMC_TASK_PLAN_INIT: self._plan_init,
-            emc.EMC_TASK_PLAN_SYNCH: self._synch,
-            emc.EMC_TASK_PLAN_CLOSE: self._close,
-            emc.EMC_TASK_PLAN_SET_OPTIONAL_STOP: self._set_optional_stop,
-            emc.EMC_TASK_PLAN_SET_BLOCK_DELETE: self._set_block_delete,
-            emc.EMC_TRAJ_SET_TELEOP_ENABLE: self._teleop,
-            emc.EMC_OPERATOR_ERROR: self._forward_operator_message,
-            emc.EMC_OPERATOR_TEXT: self._forward_operator_message,
-            emc.EMC_OPERATOR_DISPLAY: self._forward_operator_message,
-        }
+        self.handlers = Handlers(self)  # the @handler methods below
 
     # ================================================================ main loop
     def start(self) -> None:
@@ -281,8 +261,8 @@ class Task:
             self._plan()
             self._execute()
             self._finish_runs()
-        except Exception as exc:  # a bug: what runs stops, task goes on (see _internal_error)
-            self.operator_error(self._internal_error("running the program", exc))
+        except Exception as exc:  # a bug: what runs stops, task goes on (nml/commands.py)
+            self.operator_error(internal_error("task", "running the program", exc).reason)
             self._abort()
         self.outbox.flush()
         # at rest nothing changes: published again only when it may have (most of an idle
@@ -350,98 +330,83 @@ class Task:
     def handle(self, cmd: emc.NMLmsg) -> None:
         """Carry out one command and answer it (EXEC, then DONE or ERROR)."""
         stat = self.stat
-        stat.command_type = cmd.TYPE
-        stat.echo_serial_number = cmd.serial_number
-        stat.status = RCS_STATUS.EXEC
-        handler = self.handlers.get(type(cmd), self._forward)
-        try:
-            outcome = handler(cmd)
-        except (InterpError, ValueError) as exc:
-            outcome = str(exc)
-        except Exception as exc:  # a bug: this command fails, task goes on
-            outcome = self._internal_error(f"in {cmd.NAME}", exc)
-        if outcome is True:  # still running: answered when it finishes
+        echo(stat, cmd, RCS_STATUS.EXEC)
+        answer = carry_out("task", self._carry_out, cmd, expected=(InterpError, ValueError))
+        if answer.status == RCS_STATUS.EXEC:  # still running: answered when it finishes
             self.pending_serial = cmd.serial_number
             return
-        if isinstance(outcome, str):
-            stat.status = RCS_STATUS.ERROR
-            self.operator_error(outcome)
-        else:
-            stat.status = RCS_STATUS.DONE
+        stat.status = answer.status
+        if answer.reason is not None:
+            self.operator_error(answer.reason)
         self.refresh()
         self.publish()
 
+    def _carry_out(self, cmd: emc.NMLmsg) -> object:
+        """A command's preconditions (its ``requires``), then its handler here, or else
+        the process it is declared for (its ``receiver``), waiting for the answer."""
+        self._check(cmd.REQUIRES)
+        function = self.handlers.get(type(cmd))
+        if function is not None:
+            return function(cmd)
+        if cmd.RECEIVER is Receiver.MOTION:  # manual motion, settings
+            return self._order(self._send_motion, cmd)
+        if cmd.RECEIVER is Receiver.IO:
+            return self._order(self._send_io, cmd)
+        raise Refused(f"task does not handle {cmd.NAME}")
+
+    def _check(self, requires: Requires | None) -> None:
+        """Refuse unless the machine state and mode are what ``requires`` says."""
+        problem = unmet(requires, self.state, self.mode)
+        if problem:
+            raise Refused(problem)
+
     @staticmethod
-    def _internal_error(where: str, exc: Exception) -> str:
-        """The operator's message for an exception nothing expected (a bug, or a value that
-        nothing refused); its traceback goes to the log. Task itself goes on: a crash
-        would stop the whole machine."""
-        log.error("internal error %s", where, exc_info=exc)
-        return f"task: internal error {where}: {type(exc).__name__}: {exc}"
-
-    def _forward(self, cmd: emc.NMLmsg) -> str | None:
-        """Manual commands: motion's and iocontrol's own, sent on when allowed."""
-        if is_motion_type(cmd.TYPE):
-            # manual motion: jogs, homing and the teleop vector (MOT-055)
-            if isinstance(cmd, MANUAL_MOTION):
-                problem = self._require(state=STATE.ON, mode=MODE.MANUAL)
-                if problem:
-                    return problem
-            return self._send_motion(cmd, is_waiting=True)
-        if is_io_type(cmd.TYPE):
-            return self._send_io(cmd, is_waiting=True)
-        return f"task does not handle {cmd.NAME}"
-
-    def _require(self, state: STATE | None = None, mode: MODE | None = None) -> str | None:
-        if state is not None and self.state != state:
-            return f"machine must be {state.name.replace('_', ' ').lower()}, it is " + (
-                self.state.name.replace("_", " ").lower()
-            )
-        if mode is not None and self.mode != mode:
-            return f"must be in {mode.name} mode, not {self.mode.name}"
-        return None
+    def _order(send: Callable[..., str | None], msg: emc.NMLmsg) -> None:
+        """Send ``msg`` with ``send`` (_send_motion, _send_io) and wait for the answer;
+        refused if it is."""
+        problem = send(msg, is_waiting=True)
+        if problem:
+            raise Refused(problem)
 
     # ---------------------------------------------------------------- state and mode
-    def _set_state(self, cmd: emc.EMC_TASK_SET_STATE) -> str | None:
+    @handler(emc.EMC_TASK_SET_STATE)
+    def _set_state(self, cmd: emc.EMC_TASK_SET_STATE) -> None:
         target = cmd.state
         if target == STATE.ESTOP:
             if cmd.request:  # the E-stop the sender also put on the safety board
                 if cmd.request <= self.estop_handled:
-                    return None  # done already, from the board
+                    return  # done already, from the board
                 self.estop_handled = cmd.request
             self._estop(is_braking=False)
         elif target == STATE.ESTOP_RESET:
             lost = self.safety.board.lost_names() if self.safety is not None else []
             if lost:
-                return (
+                raise Refused(
                     f"cannot reset E-stop: {', '.join(lost)} was lost (its safety inputs "
                     "are not read); restart the machine"
                 )
-            problem = self._send_io(emc.EMC_AUX_ESTOP_RESET(), is_waiting=True)
-            problem = problem or self._send_io(emc.EMC_AUX_ESTOP_OFF(), is_waiting=True)
-            if problem:
-                return problem
+            self._order(self._send_io, emc.EMC_AUX_ESTOP_RESET())
+            self._order(self._send_io, emc.EMC_AUX_ESTOP_OFF())
             if self.stat.io.aux.estop:
-                return "cannot reset E-stop: the E-stop chain (iocontrol.0.emc-enable-in) is open"
+                raise Refused(
+                    "cannot reset E-stop: the E-stop chain (iocontrol.0.emc-enable-in) is open"
+                )
             self._abort_all()
             self._send_motion(emc.EMC_TRAJ_DISABLE())
             self.state = STATE.ESTOP_RESET
         elif target == STATE.ON:
             if self.state == STATE.ESTOP:
-                return "cannot turn the machine on while in E-stop"
-            problem = self._send_motion(emc.EMC_TRAJ_ENABLE(), is_waiting=True)
-            if problem:
-                return problem
+                raise Refused("cannot turn the machine on while in E-stop")
+            self._order(self._send_motion, emc.EMC_TRAJ_ENABLE())
             self.state = STATE.ON
         elif target == STATE.OFF:
             if self.state == STATE.ESTOP:
-                return "cannot turn the machine off while in E-stop (reset it first)"
+                raise Refused("cannot turn the machine off while in E-stop (reset it first)")
             self._abort_all()
             self._send_motion(emc.EMC_TRAJ_DISABLE(), is_waiting=True)
             self.state = STATE.OFF
         else:
-            return f"unknown machine state {target}"
-        return None
+            raise Refused(f"unknown machine state {target}")
 
     def _estop(self, is_braking: bool) -> None:
         """E-stop, asked for by a command, the E-stop chain or the safety board: stop
@@ -455,57 +420,54 @@ class Task:
             self._send_io(emc.EMC_AUX_ESTOP_ON())
         self.state = STATE.ESTOP
 
-    def _set_mode(self, cmd: emc.EMC_TASK_SET_MODE) -> str | None:
+    @handler(emc.EMC_TASK_SET_MODE)
+    def _set_mode(self, cmd: emc.EMC_TASK_SET_MODE) -> None:
         mode = cmd.mode
         if mode not in (MODE.MANUAL, MODE.AUTO, MODE.MDI):
-            return f"unknown mode {mode}"
+            raise Refused(f"unknown mode {mode}")
         if mode == self.mode:
-            return None
+            return
         if self.run is Run.PROGRAM:
-            return "cannot change mode while a program runs (abort it first)"
+            raise Refused("cannot change mode while a program runs (abort it first)")
         if mode == MODE.MANUAL:
             self._abort()
             self._send_motion(
                 emc.EMC_TRAJ_SET_MODE(mode=emc.EMC_TRAJ_MODE_ENUM.FREE), is_waiting=True
             )
         self.mode = MODE(mode)
-        return None
 
-    def _teleop(self, cmd: emc.EMC_TRAJ_SET_TELEOP_ENABLE) -> str | None:
+    @handler(emc.EMC_TRAJ_SET_TELEOP_ENABLE)
+    def _teleop(self, cmd: emc.EMC_TRAJ_SET_TELEOP_ENABLE) -> None:
         """Manual mode jogs joints (free) or, once homed, world axes (teleop), as LinuxCNC."""
-        problem = self._require(mode=MODE.MANUAL)
-        if problem:
-            return problem
         mode = emc.EMC_TRAJ_MODE_ENUM.TELEOP if cmd.enable else emc.EMC_TRAJ_MODE_ENUM.FREE
-        return self._send_motion(emc.EMC_TRAJ_SET_MODE(mode=mode), is_waiting=True)
+        self._order(self._send_motion, emc.EMC_TRAJ_SET_MODE(mode=mode))
 
-    def _ensure_coordinated(self) -> str | None:
+    def _ensure_coordinated(self) -> None:
         """Programs and MDI need coordinated mode, which needs homed joints (TASK-016)."""
         traj = self.stat.motion.traj
         if traj.mode == emc.EMC_TRAJ_MODE_ENUM.COORD:
-            return None
+            return
         joints = self.stat.motion.joint
         is_forced = self.setup.is_homing_forced or self.is_homing_required
         if is_forced and not all(joints[i].homed for i in range(len(self.setup.joints))):
             if self.is_homing_required:
-                return "all joints must be homed first (the last run did not save positions)"
-            return "all joints must be homed first ([TRAJ]NO_FORCE_HOMING is not set)"
-        return self._send_motion(
-            emc.EMC_TRAJ_SET_MODE(mode=emc.EMC_TRAJ_MODE_ENUM.COORD), is_waiting=True
-        )
+                raise Refused(
+                    "all joints must be homed first (the last run did not save positions)"
+                )
+            raise Refused("all joints must be homed first ([TRAJ]NO_FORCE_HOMING is not set)")
+        self._order(self._send_motion, emc.EMC_TRAJ_SET_MODE(mode=emc.EMC_TRAJ_MODE_ENUM.COORD))
 
     # ---------------------------------------------------------------- MDI and programs
-    def _mdi(self, cmd: emc.EMC_TASK_PLAN_EXECUTE) -> str | bool | None:
-        problem = self._require(state=STATE.ON, mode=MODE.MDI)
-        if problem:
-            return problem
+    @handler(emc.EMC_TASK_PLAN_EXECUTE)
+    def _mdi(self, cmd: emc.EMC_TASK_PLAN_EXECUTE) -> str | None:
         if self.run is not Run.IDLE:
             self.mdi_queue.append((cmd.serial_number, cmd.command))
-            return True
-        problem = self._ensure_coordinated()
-        if problem:
-            return problem
-        return self._start_mdi_or_abort(cmd.command)
+            return RUNNING
+        self._ensure_coordinated()
+        outcome = self._start_mdi_or_abort(cmd.command)
+        if isinstance(outcome, str):
+            raise Refused(outcome)
+        return RUNNING
 
     def _start_mdi_or_abort(self, text: str) -> str | bool:
         """``_start_mdi``; when the interpreter refuses the line, ON_ABORT_COMMAND runs
@@ -537,41 +499,37 @@ class Task:
         self.is_waiting_for_synch = status == INTERP_EXECUTE_FINISH
         return True
 
-    def _open(self, cmd: emc.EMC_TASK_PLAN_OPEN) -> str | None:
+    @handler(emc.EMC_TASK_PLAN_OPEN)
+    def _open(self, cmd: emc.EMC_TASK_PLAN_OPEN) -> None:
         if self.run is Run.PROGRAM:
-            return "cannot open a program while one runs"
+            raise Refused("cannot open a program while one runs")
         with self.watchdog:
             self.interp.close()
             self.interp.open(cmd.file)
         self.file = cmd.file
         self.current_line = 0
-        return None
 
-    def _close(self, _cmd: emc.NMLmsg) -> str | None:
+    @handler(emc.EMC_TASK_PLAN_CLOSE)
+    def _close(self, _cmd: emc.NMLmsg) -> None:
         if self.run is Run.PROGRAM:
-            return "cannot close the program while it runs"
+            raise Refused("cannot close the program while it runs")
         self.interp.close()
         self.file = ""
-        return None
 
-    def _run_program(self, cmd: emc.EMC_TASK_PLAN_RUN) -> str | None:
-        problem = self._require(state=STATE.ON, mode=MODE.AUTO)
-        if problem:
-            return problem
+    @handler(emc.EMC_TASK_PLAN_RUN)
+    def _run_program(self, cmd: emc.EMC_TASK_PLAN_RUN) -> None:
         if not self.file:
-            return "no program open (program_open first)"
+            raise Refused("no program open (program_open first)")
         if self.run is not Run.IDLE:
-            return "a program is already running"
-        problem = self._ensure_coordinated()
-        if problem:
-            return problem
+            raise Refused("a program is already running")
+        self._ensure_coordinated()
         with self.watchdog:
             self.interp.close()
             self.interp.open(self.file)
             if cmd.line > 1:
                 inside = enclosing_block(self.interp.file_lines or [], cmd.line, self.keep_alive)
                 if inside:
-                    return (
+                    raise Refused(
                         f"cannot run from line {cmd.line}: it is inside {inside}, whose state "
                         "cannot be known without running it; start at the block's first line"
                     )
@@ -588,40 +546,46 @@ class Task:
         self.skipped_tool_change = None
         self.furthest_line = 0
         self.is_stepping = False
-        return None
 
-    def _pause(self, _cmd: emc.NMLmsg) -> str | None:
+    @handler(emc.EMC_TASK_PLAN_PAUSE)
+    def _pause(self, _cmd: emc.NMLmsg) -> None:
         if self.run is Run.IDLE:
-            return "nothing is running to pause"
+            raise Refused("nothing is running to pause")
         self.is_paused = True
-        return self._send_motion(emc.EMC_TRAJ_PAUSE())
+        self._refuse_if(self._send_motion(emc.EMC_TRAJ_PAUSE()))
 
-    def _resume(self, _cmd: emc.NMLmsg) -> str | None:
+    @handler(emc.EMC_TASK_PLAN_RESUME)
+    def _resume(self, _cmd: emc.NMLmsg) -> None:
         self.is_stepping = False
         if not self.is_paused:
-            return None
+            return
         self.is_paused = False
-        return self._send_motion(emc.EMC_TRAJ_RESUME())
+        self._refuse_if(self._send_motion(emc.EMC_TRAJ_RESUME()))
 
-    def _step(self, cmd: emc.NMLmsg) -> str | None:
+    @staticmethod
+    def _refuse_if(problem: str | None) -> None:
+        if problem:
+            raise Refused(problem)
+
+    @handler(emc.EMC_TASK_PLAN_STEP)
+    def _step(self, cmd: emc.NMLmsg) -> None:
         """AUTO_STEP: carry out the next line, then pause (from idle: start the program).
         Paused with moves left in motion's queue (a feed hold in the middle of a line),
         motion runs the next of them to its end and pauses again, as LinuxCNC's task
         does; then the lines still in task's queue go out one at a time (_may_step)."""
         if self.run is Run.IDLE:
-            problem = self._run_program(emc.EMC_TASK_PLAN_RUN(line=0))
-            if problem:
-                return problem
+            self._check(emc.EMC_TASK_PLAN_RUN.REQUIRES)
+            self._run_program(emc.EMC_TASK_PLAN_RUN(line=0))
         elif self.run is not Run.PROGRAM:
-            return "step needs a program (AUTO mode)"
+            raise Refused("step needs a program (AUTO mode)")
         self.is_stepping = True
         if self.is_paused and self.stat.motion.traj.queue > 0:
-            return self._send_motion(emc.EMC_TRAJ_STEP())
+            self._refuse_if(self._send_motion(emc.EMC_TRAJ_STEP()))
+            return
         self.step_line = None
         if self.is_paused:
             self.is_paused = False
-            return self._send_motion(emc.EMC_TRAJ_RESUME())
-        return None
+            self._refuse_if(self._send_motion(emc.EMC_TRAJ_RESUME()))
 
     def _may_step(self, line: int) -> bool:
         """While stepping: may a message of ``line`` go out now? Those of the line being
@@ -635,28 +599,32 @@ class Task:
             self.step_line = None
         return False
 
-    def _plan_init(self, _cmd: emc.NMLmsg) -> str | None:
+    @handler(emc.EMC_TASK_PLAN_INIT)
+    def _plan_init(self, _cmd: emc.NMLmsg) -> None:
         if self.run is not Run.IDLE:
-            return "cannot reset the interpreter while it runs"
+            raise Refused("cannot reset the interpreter while it runs")
         self.interp.reset()
-        return None
 
+    @handler(emc.EMC_TASK_PLAN_SYNCH)
     def _synch(self, _cmd: emc.NMLmsg) -> None:
         self.canon.set_status(self.stat)
         self.interp.synch()
 
+    @handler(emc.EMC_TASK_PLAN_SET_OPTIONAL_STOP)
     def _set_optional_stop(self, cmd: emc.NMLmsg) -> None:
         self.is_optional_stop = bool(cmd.state)
 
+    @handler(emc.EMC_TASK_PLAN_SET_BLOCK_DELETE)
     def _set_block_delete(self, cmd: emc.NMLmsg) -> None:
         self.is_block_delete = bool(cmd.state)
         self.canon.SET_BLOCK_DELETE(self.is_block_delete)
 
-    def _forward_operator_message(self, cmd: emc.NMLmsg) -> str | None:
+    @handler(emc.EMC_OPERATOR_ERROR, emc.EMC_OPERATOR_TEXT, emc.EMC_OPERATOR_DISPLAY)
+    def _forward_operator_message(self, cmd: emc.NMLmsg) -> None:
         """A UI's error_msg/text_msg/display_msg goes to every UI (as LinuxCNC's task)."""
         self._write_error_channel(cmd)
-        return None
 
+    @handler(emc.EMC_TASK_ABORT)
     def _abort_command(self, cmd: emc.EMC_TASK_ABORT) -> None:
         if cmd.request:  # the abort the sender also put on the safety board
             if cmd.request <= self.abort_handled:
@@ -917,17 +885,17 @@ class Task:
                 self._write_error_channel(msg)
             elif isinstance(msg, emc.EMC_TRAJ_SET_MOTION_ID) and self._stamp_next_move(msg.id):
                 pass  # the move that follows carries the id to motion
-            elif is_motion_type(msg.TYPE):
+            elif msg.RECEIVER is Receiver.MOTION:  # moves go straight into motion's queue
                 motion = self.stat.motion
                 in_flight = self.last_motion_serial - motion.echo_serial_number
                 if motion.traj.queueFull or in_flight >= MAX_MOTION_IN_FLIGHT:
                     return
-                if _waits_for_motion(msg) and not self._is_everything_done():
+                if msg.waits_for_motion() and not self._is_everything_done():
                     return
                 if self._send_motion(msg):
                     return
-            elif is_io_type(msg.TYPE):
-                if not self._is_everything_done():
+            elif msg.RECEIVER is Receiver.IO:
+                if msg.waits_for_motion() and not self._is_everything_done():
                     return
                 if self._send_io(msg):
                     return
@@ -1218,38 +1186,6 @@ class Task:
                 return
             time.sleep(0.005)
         log.error("motion did not come to rest within %g s of the shutdown", timeout)
-
-
-# Motion commands an operator gives in manual mode, with the machine on
-MANUAL_MOTION = (
-    emc.EMC_JOG_CMD_MSG,
-    emc.EMC_JOINT_HOME,
-    emc.EMC_JOINT_UNHOME,
-    emc.EMC_TRAJ_SET_TELEOP_VECTOR,
-)
-
-
-# Motion commands of a program that go out only once every move before them is done, as
-# LinuxCNC's task preconditions have it: the spindle never changes in the middle of a cut,
-# a probe or rigid tap never blends with what came before. (Moves and their settings, and
-# the synchronised I/O of M62/M63/M67, go straight into motion's queue.)
-WAITING_FOR_MOTION = (
-    emc.EMC_SPINDLE_SPEED,
-    emc.EMC_SPINDLE_ON,
-    emc.EMC_SPINDLE_OFF,
-    emc.EMC_SPINDLE_ORIENT,
-    emc.EMC_SPINDLE_WAIT_ORIENT_COMPLETE,
-    emc.EMC_TRAJ_PROBE,
-    emc.EMC_TRAJ_RIGID_TAP,
-    emc.EMC_TRAJ_CLEAR_PROBE_TRIPPED_FLAG,
-    emc.EMC_MOTION_ADAPTIVE,
-)
-
-
-def _waits_for_motion(msg: emc.NMLmsg) -> bool:
-    if isinstance(msg, WAITING_FOR_MOTION):
-        return True
-    return isinstance(msg, emc.EMC_MOTION_SET_AOUT | emc.EMC_MOTION_SET_DOUT) and bool(msg.now)
 
 
 def _writable_dirs(ini: IniFile, setup: MachineSetup) -> list[str]:

@@ -5,6 +5,7 @@ The public names are reached through the ``cnc`` package (``cnc.stat``, ``cnc.co
 ``import cnc`` stays cheap for commands such as ``cnc rs274``. Where things live:
 
 - ``constants``: LinuxCNC's integer constants (plain ints, no imports);
+- ``errors``: ``cnc.error``;
 - ``inifile``: ``cnc.ini(path)``, LinuxCNC's ``linuxcnc.ini``;
 - ``connection``: which NML file to use and how to attach to the controller's buffers;
 - ``status``: ``stat`` (and the ``tool`` record of ``stat.tool_table``);
@@ -19,14 +20,11 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-
-class error(RuntimeError):  # noqa: N818  (LinuxCNC's name: linuxcnc.error)
-    """The controller cannot be reached, or refused a request (``linuxcnc.error``)."""
-
+from cnc.api.errors import error as error  # (also `from cnc.api import error`)
 
 # Public name -> submodule of cnc.api that defines it; constants are found in `constants`.
 _HOMES = {
-    "error": "cnc.api",
+    "error": "cnc.api.errors",
     "stat": "cnc.api.status",
     "tool": "cnc.api.status",
     "command": "cnc.api.commands",

@@ -21,8 +21,8 @@ from collections.abc import Callable
 from typing import Any
 
 from cnc.api import constants as c
-from cnc.api import error
 from cnc.api.connection import Link
+from cnc.api.errors import error
 from cnc.api.safety import jog_lease, keep_alive, request_abort, request_estop
 from nml import emc
 from nml.channels import EMC_COMMAND, EMC_STATUS

@@ -27,7 +27,7 @@ from pathlib import Path
 
 import posix_ipc
 
-from cnc.api import error
+from cnc.api.errors import error
 from cnc.ini import IniError, IniFile
 from cnc.runtime import read_runtime_info
 from nml.channels import DEFAULT_NML_FILE, load_config

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import os
 
-from cnc.api import error
+from cnc.api.errors import error
 from cnc.ini import IniError, IniFile
 
 

@@ -16,8 +16,8 @@ from __future__ import annotations
 
 import os
 
-from cnc.api import error
 from cnc.api.connection import Link
+from cnc.api.errors import error
 from nml import emc
 from nml.channels import EMC_ERROR
 from nml.errors import NmlError, NmlFormatError

@@ -14,8 +14,8 @@ from collections.abc import Callable
 from operator import attrgetter, itemgetter
 from typing import Any
 
-from cnc.api import error
 from cnc.api.connection import Link
+from cnc.api.errors import error
 from iocontrol.tooldata import ToolDataError, ToolDataReader
 from iocontrol.tooltable import ToolTable
 from nml import emc

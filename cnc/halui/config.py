@@ -12,8 +12,9 @@ from dataclasses import dataclass
 
 from cnc.ini import IniFile
 from cnc.inischema import SCHEMA, MachineConfig, read_config
+from nml.axes import AXIS_LETTERS as ALL_AXES
 
-AXIS_LETTERS = "xyzabcuvw"  # axis index -> letter, as halui.axis.selected counts them
+AXIS_LETTERS = ALL_AXES.lower()  # axis index -> letter, as halui.axis.selected counts them
 _KEYS = SCHEMA["HALUI"].keys
 
 

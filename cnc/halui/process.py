@@ -15,8 +15,8 @@ import signal
 import time
 from typing import Any
 
-from cnc.api import error
 from cnc.api.commands import command
+from cnc.api.errors import error
 from cnc.api.safety import use_heartbeat
 from cnc.api.status import stat
 from cnc.halui.config import HaluiConfig

@@ -18,10 +18,10 @@ from collections.abc import Sequence
 from typing import Any
 
 import cnc
+from nml.axes import AXIS_LETTERS
 
 Status = Any  # a polled cnc.stat, or any object with its attribute names
 
-AXIS_LETTERS = "XYZABCUVW"
 
 TASK_STATES = {
     cnc.STATE_ESTOP: "ESTOP",

@@ -54,6 +54,7 @@ from typing import Any
 
 import cnc
 from cnc.api import constants as c
+from nml.axes import AXIS_LETTERS
 
 DEFAULT_PORT = 5007
 SERVER_VERSION = "1.1"
@@ -139,7 +140,6 @@ ITEMS = [
 ]
 NEEDS_ENABLE_FROM = ITEMS.index("INIFILE")
 NEEDS_MACHINE_ON_AFTER = ITEMS.index("MACHINE")
-AXIS_LETTERS = "XYZABCUVW"
 LINEAR_UNITS = {"INCH": 1 / 25.4, "MM": 1.0, "CM": 0.1}  # user units per mm
 ANGULAR_UNITS = {"DEG": 1.0, "RAD": math.pi / 180, "GRAD": 100 / 90}  # per degree
 CANON_UNITS = {1: "INCH", 2: "MM", 3: "CM"}  # task.program_units

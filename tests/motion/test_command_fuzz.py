@@ -15,11 +15,12 @@ import struct
 import hypothesis.strategies as st
 from hypothesis import HealthCheck, given, settings
 
-from motion.controller import _HANDLERS, COORD, FREE, TELEOP, MotionController
+from motion.controller import COORD, FREE, TELEOP, MotionController
 from nml import emc
+from nml.commands import handled_by
 from tests.motion.test_controller import enabled_homed, make, run
 
-COMMANDS = sorted(_HANDLERS, key=lambda cls: cls.NAME)
+COMMANDS = sorted(handled_by(MotionController), key=lambda cls: cls.NAME)
 SPECIAL_FLOATS = [0.0, -0.0, 1.0, -1.0, 0.5, 100.0, -100.0, 1e9, 1e300, -1e300, 5e-324]
 SPECIAL_FLOATS += [math.nan, math.inf, -math.inf]
 SPECIAL_INTS = [0, 1, -1, 2, 3, 8, 9, 64, 1000, 2**31 - 1, -(2**31)]

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import shlex
 import subprocess
+import sys
 import tempfile
 import threading
 import time
@@ -24,6 +25,7 @@ from cnc.ui.formatting import parse_float
 from cnc.ui.web.offsets import SYSTEMS
 from cnc.ui.web.settings import Settings
 from iocontrol.tooltable import ToolEntry, ToolTable, ToolTableError
+from nml.commands import Handlers, Refused, handler
 
 TIMEOUT_S = 10.0  # how long a command may take before the page is told it still runs
 PROGRAM_TIMEOUT_S = 3600.0  # an MDI line may be a long move
@@ -33,26 +35,17 @@ MAX_TEXT_BYTES = 8_000_000  # a program sent whole as text (files.get)
 TOOL_FILE_LOCK = threading.Lock()  # one tool edit at a time (the file is read, then written)
 
 
-class CommandError(Exception):
+class CommandError(Refused):
     """A command that could not be sent, or that the controller refused; str() says why.
     ``is_reported``: the controller refused it and said why on the error channel, which
-    every page shows already."""
+    every page shows already (a quiet refusal, nml/commands.py)."""
 
     def __init__(self, text: str, is_reported: bool = False) -> None:
-        super().__init__(text)
-        self.is_reported = is_reported
+        super().__init__(text, is_quiet=is_reported)
 
-
-Handler = Callable[["Commands", dict[str, Any]], str | None]
-HANDLERS: dict[str, Handler] = {}
-
-
-def handler(name: str) -> Callable[[Handler], Handler]:
-    def register(run: Handler) -> Handler:
-        HANDLERS[name] = run
-        return run
-
-    return register
+    @property
+    def is_reported(self) -> bool:
+        return self.is_quiet
 
 
 # ------------------------------------------------------------------ argument helpers
@@ -688,3 +681,7 @@ def _flood(c: Commands, r: dict[str, Any]) -> None:
 @handler("mist")
 def _mist(c: Commands, r: dict[str, Any]) -> None:
     c.send("mist", cnc.MIST_ON if switch(r) else cnc.MIST_OFF)
+
+
+# The page's commands: the @handler functions of this module (nml/commands.py)
+HANDLERS = Handlers(sys.modules[__name__])
