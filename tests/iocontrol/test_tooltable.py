@@ -60,8 +60,6 @@ def test_random_changer_indexes_by_pocket(tmp_path) -> None:
 @pytest.mark.parametrize(
     ("text", "cause"),
     [
-        ("T1 P1 Z0.5\nT2 P2 K3\n", "2: unknown word 'K3'"),
-        ("T1 P1 Zabc\n", "1: bad number in word 'Zabc'"),
         ("T1 P1 Z0.5\nT2 P2 Z1.5x\n", "2: bad number in word 'Z1.5x'"),
         ("T1 P1 Z1,5\n", "1: bad number in word 'Z1,5'"),
         ("P3 Z1\n", "1: T word missing"),
