@@ -44,6 +44,9 @@ SIM = REPO / "configs" / "sim"
 CONFIGS = ["mill", "mill_switches", "mill_inch", "lathe", "gantry", "corexy", "random_tc"]
 # machines with simulated hardware (a Mesa card, a VFD): tests/hw/test_mesa_sim_e2e.py
 HARDWARE_SIMS = ["mesa_7i96s"]
+# a machine for motion's features (locking indexer, extra joint, external offsets), its own
+# end-to-end test: tests/configs/test_features_e2e.py
+FEATURE_SIMS = ["features"]
 MILL_PROGRAMS = ["pocket.ngc", "drill.ngc", "toolchange.ngc"]
 PROGRAMS = {name: MILL_PROGRAMS for name in CONFIGS} | {"lathe": ["lathe_turn.ngc"]}
 # LinuxCNC's persistent parameters: G28 and G30 homes, G92, the nine coordinate systems.
@@ -82,9 +85,10 @@ def joint_float(ini: IniFile, joint: int, key: str) -> float:
 
 # --------------------------------------------------------------------------- the INI files
 def test_the_sim_folder_holds_the_advertised_machines() -> None:
-    assert sorted(p.stem for p in SIM.glob("*.ini")) == sorted(CONFIGS + HARDWARE_SIMS)
+    advertised = CONFIGS + HARDWARE_SIMS + FEATURE_SIMS
+    assert sorted(p.stem for p in SIM.glob("*.ini")) == sorted(advertised)
     readme = (SIM / "README.md").read_text()
-    for name in CONFIGS + HARDWARE_SIMS:
+    for name in advertised:
         assert f"{name}.ini" in readme
 
 
