@@ -402,6 +402,9 @@ def _edit_tool_table(c: Commands, change: Callable[[ToolTable, Path], None]) -> 
             raise CommandError(f"{exc}; fix the file first") from None
         except OSError as exc:
             raise CommandError(f"cannot read {path}: {exc.strerror}") from None
+        if table.has_unreadable_lines:  # saved, the lines LinuxCNC skips would be lost
+            skipped = "; ".join(str(w) for w in table.warnings if "skipped" in str(w))
+            raise CommandError(f"{skipped}; fix the file first")
         change(table, path)
         try:
             table.save(path)
