@@ -25,14 +25,6 @@ from cnc.ui import formatting as fmt
 PLACES = 4  # digits kept after '.' for positions, speeds and overrides
 OFFLINE = "OFFLINE"  # "state" while the controller is not running
 PROGRAM_STATES = ("IDLE", "RUNNING", "PAUSED")
-MESSAGE_KINDS = {
-    cnc.OPERATOR_ERROR: "error",
-    cnc.NML_ERROR: "error",
-    cnc.OPERATOR_TEXT: "text",
-    cnc.NML_TEXT: "text",
-    cnc.OPERATOR_DISPLAY: "display",
-    cnc.NML_DISPLAY: "display",
-}
 
 
 @dataclass(frozen=True)
@@ -176,7 +168,7 @@ class MachineView:
             if message is None:
                 break
             kind, text = message
-            found.append(Message(time.time(), MESSAGE_KINDS.get(kind, "error"), text))
+            found.append(Message(time.time(), fmt.MESSAGE_KINDS.get(kind, "error"), text))
         return found
 
     def close(self) -> None:

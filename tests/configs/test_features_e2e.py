@@ -3,16 +3,13 @@ offsets, through the real processes (``cnc run --headless``, ``cnc sh``, ``cnc h
 
 from __future__ import annotations
 
-import shutil
 import time
 from pathlib import Path
 
 import pytest
 
 import cnc
-from cnc.runtime import read_runtime_info
-from tests.configs.test_sim_machines_e2e import cnc_command
-from tests.hal.halrun_util import REPO
+from tests.configs.test_sim_machines_e2e import cnc_command, launch_sim
 
 C, Z = 5, 2  # axis indices
 
@@ -34,21 +31,12 @@ def until_pin(name: str, value: float, folder: Path, timeout: float = 30) -> Non
 def test_indexer_extra_joint_and_external_offsets_work_on_the_running_machine(
     procs, tmp_path: Path, cnc_instance: str
 ) -> None:
-    configs = tmp_path / "configs"
-    shutil.copytree(REPO / "configs", configs)
-    folder = configs / "sim"
-    launcher = procs.python("-m", "cnc", "run", "--headless", "features.ini", cwd=folder)
-    deadline = time.monotonic() + 60
-    while (info := read_runtime_info()) is None or info.pid != launcher.pid:
-        assert launcher.poll() is None, launcher.stderr.read()
-        assert time.monotonic() < deadline, "the machine did not come up"
-        time.sleep(0.05)
+    launcher, folder = launch_sim(procs, tmp_path, "features")
     try:
         # the C move needs the indexer's unlock (a timedelay answers it): it would wait
         # forever without the handshake; afterwards the table is locked again
-        script = (
-            "estop off; machine on; home all; wait; mode mdi; mdi G0 C90; wait; mdi G0 Z-10; wait"
-        )
+        script = "estop off; machine on; home all; wait; mode mdi; mdi G0 C90; wait"
+        script += "; mdi G0 Z-10; wait"  # (an indexing axis moves alone)
         output = cnc_command("sh", "-c", script, cwd=folder)
         assert "ERROR" not in output, output
         stat = cnc.stat()

@@ -48,10 +48,10 @@ def cnc_command(*args: str, cwd: Path) -> str:
     return done.stdout
 
 
-@pytest.mark.parametrize("name", list(MACHINES))
-def test_sim_machine_homes_moves_and_changes_tools(
-    name: str, procs, tmp_path: Path, cnc_instance: str
-) -> None:
+def launch_sim(procs, tmp_path: Path, name: str) -> tuple[subprocess.Popen[str], Path]:
+    """``cnc run --headless`` of configs/sim/NAME.ini from a copy of the configs folder
+    (a running machine writes its files); the launcher and the copy's sim folder, once the
+    machine runs."""
     configs = tmp_path / "configs"
     shutil.copytree(REPO / "configs", configs)
     folder = configs / "sim"
@@ -61,7 +61,14 @@ def test_sim_machine_homes_moves_and_changes_tools(
         assert launcher.poll() is None, launcher.stderr.read()
         assert time.monotonic() < deadline, "the machine did not come up"
         time.sleep(0.05)
+    return launcher, folder
 
+
+@pytest.mark.parametrize("name", list(MACHINES))
+def test_sim_machine_homes_moves_and_changes_tools(
+    name: str, procs, tmp_path: Path, cnc_instance: str
+) -> None:
+    launcher, folder = launch_sim(procs, tmp_path, name)
     try:
         lines, expected, tool = MACHINES[name]
         script = ["estop off", "machine on", "home all", "wait", "mode mdi"]
