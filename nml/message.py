@@ -26,10 +26,13 @@ duplicate numbers and names (NML-050) and maps numbers to names (NML-051).
 from __future__ import annotations
 
 import enum
+import inspect
 import struct
+import sys
 import zlib
 from dataclasses import dataclass
-from typing import Annotated, Any, ClassVar, get_args, get_origin, get_type_hints
+from types import CodeType
+from typing import Annotated, Any, ClassVar, get_args, get_origin
 
 import numpy as np
 
@@ -239,6 +242,37 @@ class StructArray:
 # ----------------------------------------------------------------------------- structs
 
 
+_ANNOTATION_CODE: dict[str, CodeType] = {}
+
+
+def _type_hints(cls: type) -> dict[str, Any]:
+    """``typing.get_type_hints(cls, include_extras=True)``, at a fraction of the cost: each
+    class's own annotations (strings, under ``from __future__ import annotations``) are
+    evaluated once and kept on it, where ``get_type_hints`` evaluates every base's again
+    for each subclass (a third of a second per process for nml.emc's 180 classes)."""
+    hints: dict[str, Any] = {}
+    for base in reversed(cls.__mro__[:-1]):  # (object has none)
+        hints.update(_own_type_hints(base))
+    return hints
+
+
+def _own_type_hints(cls: type) -> dict[str, Any]:
+    own = cls.__dict__.get("_own_hints")
+    if own is None:
+        own = {}
+        module_names = vars(sys.modules[cls.__module__])
+        class_names = dict(vars(cls))
+        for name, hint in inspect.get_annotations(cls).items():
+            if isinstance(hint, str):
+                code = _ANNOTATION_CODE.get(hint)
+                if code is None:
+                    code = _ANNOTATION_CODE[hint] = compile(hint, "<annotation>", "eval")
+                hint = eval(code, module_names, class_names)  # the class's own text
+            own[name] = hint
+        cls._own_hints = own  # type: ignore[attr-defined]
+    return own
+
+
 class Struct:
     """A plain data structure with a fixed layout (``EmcPose``, ``CANON_TOOL_TABLE`` ...)."""
 
@@ -257,7 +291,7 @@ class Struct:
 
     @classmethod
     def _declare_fields(cls) -> None:
-        hints = get_type_hints(cls, include_extras=True)
+        hints = _type_hints(cls)
         defaults = dict(cls.defaults)
         fields = []
         for name, hint in hints.items():
