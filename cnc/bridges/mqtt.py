@@ -184,6 +184,9 @@ class MqttBridge:
         self.view = MachineView(ini_path)
         self.is_stopping = False
         self.is_resync_needed = threading.Event()  # (re)connected: publish everything
+        # set once the command topic is subscribed: nothing is published before, so a
+        # client that sees online = true knows its commands are heard
+        self.is_connected = threading.Event()
         self.is_anonymous_refused: bool | None = None  # what the broker said, once known
         self.commands: dict[bool, queue.Queue[dict[str, Any]]] = {
             is_urgent: queue.Queue() for is_urgent in (True, False)
@@ -202,8 +205,10 @@ class MqttBridge:
         say(f"connected to {self.settings.broker}:{self.settings.port} as {self.root}")
         client.subscribe(f"{self.root}/command", qos=1)
         self.is_resync_needed.set()
+        self.is_connected.set()
 
     def _on_disconnect(self, _c: Any, _d: Any, _f: Any, reason: Any, _p: Any) -> None:
+        self.is_connected.clear()
         if not self.is_stopping:
             say(f"disconnected from the broker ({reason}): reconnecting")
 
@@ -276,6 +281,8 @@ class MqttBridge:
         is_online = None
         due = time.monotonic()
         while not self.is_stopping:
+            if not self.is_connected.wait(self.settings.cycle_time):
+                continue  # (what changes meanwhile is published in full on connecting)
             changed = self.view.poll()
             if self.is_resync_needed.is_set():
                 self.is_resync_needed.clear()
