@@ -24,8 +24,10 @@ averaged over the machines: ``idle`` (nothing moves) and ``moving`` (every machi
 back-and-forth G1 moves, so positions change every bridge cycle). ``load_average`` says
 how busy the computer was.
 
-``jsonrpc_round_trip_ms`` is left null: the web server's JSON-RPC round trip for a no-op
-command is measured by scripts/bench/api_bench.py, to be put beside these figures.
+``jsonrpc_round_trip_ms``: after the fleet has stopped, a no-op command's round trip
+through the web server's JSON-RPC API (websocket and HTTP POST) beside the Python API's,
+on one more machine with its own web server (api_bench.py's ``round_trips``, ``--calls``
+of each): ``python_api``, ``rpc_ws``, ``rpc_http`` with ``median`` and ``p99``.
 """
 
 from __future__ import annotations
@@ -347,11 +349,23 @@ def move_back_and_forth(machines: list[Machine], stop: threading.Event) -> None:
         time.sleep(0.05)
 
 
+def jsonrpc_round_trips(calls: int) -> dict[str, dict[str, float]]:
+    """A no-op command through the web server's JSON-RPC API against the Python API's."""
+    from api_bench import round_trips  # (this folder: scripts/bench)
+
+    found = round_trips(calls)
+    return {
+        way: {"median": found[f"noop_{way}_ms_median"], "p99": found[f"noop_{way}_ms_p99"]}
+        for way in ("python_api", "rpc_ws", "rpc_http")
+    }
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--machines", type=int, default=5)
     parser.add_argument("--changes", type=int, default=20, help="per machine")
     parser.add_argument("--seconds", type=float, default=5.0, help="each CPU window")
+    parser.add_argument("--calls", type=int, default=200, help="JSON-RPC round trips")
     args = parser.parse_args(argv)
     result: dict[str, Any] = {"machines": args.machines}
     with (
@@ -396,7 +410,6 @@ def main(argv: list[str] | None = None) -> int:
             result["cpu_percent_per_machine"]["moving"] = cpu_window(machines, args.seconds)
             stop.set()
             mover.join()
-            result["jsonrpc_round_trip_ms"] = None  # scripts/bench/api_bench.py (the web API)
             result["load_average"] = [round(x, 2) for x in os.getloadavg()]
         finally:
             if opcua is not None:
@@ -406,6 +419,7 @@ def main(argv: list[str] | None = None) -> int:
                 mqtt_client.loop_stop()
             for machine in machines:
                 machine.stop()
+    result["jsonrpc_round_trip_ms"] = jsonrpc_round_trips(args.calls)
     print(json.dumps(result, indent=2))
     return 0
 
