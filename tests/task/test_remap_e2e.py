@@ -47,12 +47,14 @@ o10 if [#<tool_in_spindle> GT 0]
   G53 G0 X[#<_ini[rack]x0> + #<tool_in_spindle> * #<_ini[rack]dx>] Y#<_ini[rack]y>
   G53 G1 Z#<_ini[rack]z> F#<_ini[rack]feed>
   M64 P0
+  G4 P0.2 (the clamp lets go; the test's 10 ms polls see the tool down)
   G53 G0 Z0
 o10 endif
 o20 if [#<selected_tool> GT 0]
   G53 G0 X[#<_ini[rack]x0> + #<selected_tool> * #<_ini[rack]dx>] Y#<_ini[rack]y>
   G53 G1 Z#<_ini[rack]z> F#<_ini[rack]feed>
   M65 P0
+  G4 P0.2
   G53 G0 Z0
 o20 endif
 o<rack_change> endsub [1]

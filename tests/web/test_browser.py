@@ -242,6 +242,9 @@ def a_program_runs_with_progress_and_an_estimate(  # type: ignore[no-untyped-def
     page, shots: Path, machine: Machine
 ) -> None:
     mdi(page, "G0 X0 Y0")
+    # (as an operator waits for the move: Open while MDI runs is refused, as in AXIS)
+    expect(work(page, "X")).to_have_text("0.000")
+    machine.until(lambda s: s.current_vel == 0 and s.interp_state == cnc.INTERP_IDLE)
     page.select_option("#program-list", "part.ngc")
     page.click("#program-open")
     expect(page.locator("#program-list")).to_have_value("part.ngc")  # not the first file
