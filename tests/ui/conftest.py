@@ -22,7 +22,12 @@ from tests.conftest import Processes
 
 WAIT_S = 20.0  # generous: only reached when something is broken
 # How the lead's `cnc top` / `cnc sh` subcommands call the UIs.
-UI_MAIN = "import sys; from cnc.ui.{name} import main; sys.exit(main(sys.argv[1:]))"
+# Ctrl-C at its default, as a terminal starts a program: a test run started in the
+# background by a script (``pytest &``) ignores SIGINT, and its children would inherit that.
+UI_MAIN = (
+    "import signal, sys; signal.signal(signal.SIGINT, signal.default_int_handler); "
+    "from cnc.ui.{name} import main; sys.exit(main(sys.argv[1:]))"
+)
 
 
 @pytest.fixture
