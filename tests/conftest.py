@@ -4,7 +4,8 @@
   semaphores are named apart from any running machine and from other tests; whatever the
   test leaves in /dev/shm is removed afterwards, and reported as a failure of the test.
 - ``procs`` starts real OS processes and kills any still running at teardown.
-- Before any test, the project's modules are compiled to bytecode (``compile_packages``).
+- Tests marked ``slow`` run first; before any test, the project's modules are compiled to
+  bytecode (``compile_packages``).
 - ``collector_off`` runs a test as the realtime host runs: no automatic garbage collection.
 """
 
@@ -99,6 +100,12 @@ def pytest_configure(config: pytest.Config) -> None:
     config.addinivalue_line("markers", "allow_leftovers: the test checks cleanup itself")
     if not hasattr(config, "workerinput"):  # once, in the process that starts the workers
         compile_packages()
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Tests marked slow first (in their order): the workers end on short tests together
+    instead of one waiting for the other's minute-long browser test."""
+    items.sort(key=lambda item: item.get_closest_marker("slow") is None)
 
 
 PACKAGES = ("cnc", "hal", "iocontrol", "motion", "nml", "scripts", "task", "tests")
