@@ -239,7 +239,7 @@ def main(argv: list[str]) -> int:
     args = _parser().parse_args(argv)
     ini = args.ini
     if ini is None:
-        from cnc.ui.web.server import running_ini
+        from cnc.ui.controller import running_ini  # (the CLI only: it loads the API)
 
         ini = running_ini()
         if ini is None:

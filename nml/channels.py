@@ -1,7 +1,7 @@
 """The controller's standard channels and a process's view of all its buffers (NML-036, 071).
 
 ``Nml(config, process)`` opens every buffer the process has a P line for: the channel object
-of NML-036. ``message_sizes`` tells the configuration check how large the messages are that
+of NML-036. ``message_room`` tells the configuration check how large the messages are that
 the controller writes to each standard buffer, so an undersized B line is caught when the
 file is parsed, not at the first write.
 """
@@ -12,11 +12,11 @@ from pathlib import Path
 
 from nml import config as nml_config
 from nml.codec import Encoding, max_encoded_size
-from nml.config import BufferConfig, NmlConfig
+from nml.config import BufferConfig, MessageRoom, NmlConfig
 from nml.errors import NmlAccessError
 from nml.message import MessageKind, NMLmsg, Receiver
 from nml.registry import REGISTRY
-from nml.shmem import ShmBuffer
+from nml.shmem import BufferLayout, ShmBuffer
 
 # Buffer names of LinuxCNC's linuxcnc.nml (NML-071) and of our task <-> motion pair.
 EMC_COMMAND = "emcCommand"
@@ -68,18 +68,20 @@ def messages_of(buffer_name: str) -> list[type[NMLmsg]]:
     return table.get(buffer_name, [])
 
 
-def message_sizes(buffer: BufferConfig) -> int | None:
-    """The largest encoded message the controller writes to ``buffer``, if it is standard."""
+def message_room(buffer: BufferConfig) -> MessageRoom | None:
+    """The largest encoded message the controller writes to ``buffer``, if it is standard,
+    and the buffer size that holds it."""
     classes = messages_of(buffer.name)
     if not classes:
         return None
     encoding = Encoding.from_neut(buffer.is_neutral)
-    return max(max_encoded_size(cls, encoding) for cls in classes)
+    largest = max(max_encoded_size(cls, encoding) for cls in classes)
+    return MessageRoom(largest, BufferLayout.bytes_needed(buffer, largest))
 
 
 def load_config(path: str | Path | None = None) -> NmlConfig:
     """Parse an NML file (default: ours) and check its sizes against our messages."""
-    return nml_config.load(path or DEFAULT_NML_FILE, message_sizes=message_sizes)
+    return nml_config.load(path or DEFAULT_NML_FILE, message_room=message_room)
 
 
 class Nml:

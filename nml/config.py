@@ -18,6 +18,7 @@ import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import NamedTuple
 
 from nml.errors import NmlConfigError
 
@@ -122,22 +123,30 @@ class NmlConfig:
         return [p for p in self.processes if p.buffer == buffer]
 
 
+class MessageRoom(NamedTuple):
+    """What a buffer's messages need: the largest one encoded, and the smallest B-line
+    size that holds it (``nml.channels.message_room``, from the shared-memory layout)."""
+
+    largest: int
+    needed: int
+
+
 def load(
-    path: str | Path, *, message_sizes: Callable[[BufferConfig], int | None] | None = None
+    path: str | Path, *, message_room: Callable[[BufferConfig], MessageRoom | None] | None = None
 ) -> NmlConfig:
-    """Parse an NML file; ``message_sizes`` gives, per buffer, the largest message it carries."""
+    """Parse an NML file; ``message_room`` says, per buffer, the room its messages need."""
     try:
         text = Path(path).read_text(encoding="utf-8", errors="replace")
     except OSError as exc:
         raise NmlConfigError([f"{path}:0: cannot read NML file: {exc.strerror}"]) from exc
-    return parse(text, str(path), message_sizes=message_sizes)
+    return parse(text, str(path), message_room=message_room)
 
 
 def parse(
     text: str,
     path: str = "<string>",
     *,
-    message_sizes: Callable[[BufferConfig], int | None] | None = None,
+    message_room: Callable[[BufferConfig], MessageRoom | None] | None = None,
 ) -> NmlConfig:
     config = NmlConfig(path)
     errors: list[str] = []
@@ -159,8 +168,8 @@ def parse(
         else:
             errors.append(f"{where}: line must start with B (buffer) or P (process), got '{kind}'")
     _check_processes(config, errors)
-    if message_sizes is not None:
-        _check_sizes(config, message_sizes, errors)
+    if message_room is not None:
+        _check_sizes(config, message_room, errors)
     for text_warning in config.warnings:
         warnings.warn(text_warning, NmlConfigWarning, stacklevel=2)
     if errors:
@@ -379,15 +388,13 @@ def _check_processes(config: NmlConfig, errors: list[str]) -> None:
 
 
 def _check_sizes(
-    config: NmlConfig, message_sizes: Callable[[BufferConfig], int | None], errors: list[str]
+    config: NmlConfig, message_room: Callable[[BufferConfig], MessageRoom | None], errors: list[str]
 ) -> None:
-    from nml.shmem import BufferLayout
-
     for buffer in config.buffers.values():
-        largest = message_sizes(buffer)
-        if largest is None:
+        room = message_room(buffer)
+        if room is None:
             continue
-        needed = BufferLayout.bytes_needed(buffer, largest)
+        largest, needed = room
         if buffer.size < needed:
             errors.append(
                 f"{buffer.where}: buffer {buffer.name}: size {buffer.size} is too small for its "

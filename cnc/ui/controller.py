@@ -121,3 +121,12 @@ class Controller:
             return None if value is None else float(value)
         except ValueError:
             return None
+
+
+def running_ini() -> str | None:
+    """The INI file of the running machine (stat.ini_filename), or None."""
+    probe = Controller()
+    try:
+        return probe.ini_file()
+    finally:
+        probe.close()

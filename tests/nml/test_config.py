@@ -9,7 +9,7 @@ import pytest
 
 from nml import config as nml_config
 from nml.channels import DEFAULT_NML_FILE, load_config
-from nml.config import NmlConfigWarning, parse
+from nml.config import MessageRoom, NmlConfigWarning, parse
 from nml.errors import NmlConfigError
 
 GOOD = """\
@@ -175,12 +175,12 @@ def test_every_error_of_a_file_is_reported_at_once() -> None:
 
 def test_buffer_too_small_for_its_messages() -> None:
     text = "B emcStatus SHMEM localhost 2048 0 0 1 16 1\n"
-    errors = errors_of(text, message_sizes=lambda buffer: 5000)
+    errors = errors_of(text, message_room=lambda buffer: MessageRoom(5000, 5000))
     assert (
         "test.nml:1: buffer emcStatus: size 2048 is too small for its largest message"
         in (errors[0])
     )
-    parse(text.replace("2048", "8192"), message_sizes=lambda buffer: 5000)
+    parse(text.replace("2048", "8192"), message_room=lambda buffer: MessageRoom(5000, 5000))
 
 
 def test_missing_file_is_a_clear_error(tmp_path: Path) -> None:

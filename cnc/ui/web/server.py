@@ -58,7 +58,7 @@ from cnc.apikeys import (
     keys_file_for,
 )
 from cnc.ini import IniError
-from cnc.ui.controller import Controller
+from cnc.ui.controller import running_ini
 from cnc.ui.web.hub import Client, Hub, send
 from cnc.ui.web.jobs import RECORD_SIZE
 from cnc.ui.web.settings import Settings
@@ -417,15 +417,6 @@ def _parser() -> argparse.ArgumentParser:
         help=f"token that may only watch (default ${READ_ONLY_TOKEN_ENV})",
     )
     return parser
-
-
-def running_ini() -> str | None:
-    """The INI file of the running machine (stat.ini_filename), or None."""
-    probe = Controller()
-    try:
-        return probe.ini_file()
-    finally:
-        probe.close()
 
 
 def main(argv: list[str]) -> int:
