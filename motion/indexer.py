@@ -20,6 +20,7 @@ its result holds the start of the next move (``tp.is_start_held``).
 from __future__ import annotations
 
 from motion.joint import Joint
+from nml.axes import AXIS_LETTERS
 
 
 class LockingIndexers:
@@ -70,7 +71,7 @@ class LockingIndexers:
         if joint is not None and is_locking_joint:
             return f"cannot jog locking indexer joint {joint}"
         if axis is not None and axis in self.axis_joint:
-            letter = "XYZABCUVW"[axis]
+            letter = AXIS_LETTERS[axis]
             return f"cannot jog locking indexer axis {letter} (joint {self.axis_joint[axis]})"
         return None
 

@@ -36,13 +36,13 @@ from cnc.ini import IniFile
 from iocontrol.tooltable import ToolTable
 from motion.tp import TermCond, TrajectoryPlanner
 from nml import emc
+from nml.axes import NUM_AXES
 from task.canon import CanonSetup, TaskCanon
 from task.interp.errors import INTERP_ENDFILE, INTERP_EXIT, InterpError
 from task.interp.interp import Interpreter
 from task.setup import MachineSetup, load_setup
 
 DEFAULT_SERVO_PERIOD_S = 0.001
-NUM_AXES = 9
 PROGRESS_EVERY_S = 0.5  # of machine time between two calls of ``progress``
 _TERM_CONDS = {
     emc.EMC_TRAJ_TERM_COND.STOP: TermCond.STOP,

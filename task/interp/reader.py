@@ -10,6 +10,8 @@ from __future__ import annotations
 import math
 import re
 
+from nml.axes import AXIS_LETTERS
+
 from . import ldmath
 from .block import (
     CT_NGC_M98_SUB,
@@ -262,7 +264,7 @@ class ReaderMixin:
             ("r", "Multiple r words on one line"),
         ):
             readers[letter] = self._word_reader(letter, message)
-        for bit, letter in enumerate("xyzabcuvw"):
+        for bit, letter in enumerate(AXIS_LETTERS.lower()):
             if axis_mask & (1 << bit):
                 if letter in "uvw":
                     message = f"Multiple {letter.upper()} words on one line"

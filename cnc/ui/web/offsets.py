@@ -13,8 +13,9 @@ import math
 from pathlib import Path
 from typing import Any
 
+from nml.axes import AXIS_LETTERS
+
 SYSTEMS = ("G54", "G55", "G56", "G57", "G58", "G59", "G59.1", "G59.2", "G59.3")
-LETTERS = "XYZABCUVW"
 G92_BASE = 5211  # X; 5210 is "G92 in effect"
 G5X_BASE = 5221  # G54 X; each system 20 further; X..W then the rotation (R)
 G5X_STEP = 20
@@ -45,7 +46,7 @@ def read_parameters(path: Path | None) -> dict[int, float]:
 def offsets_table(parameters: dict[int, float], status: Any, axes: str) -> dict[str, Any]:
     """{"axes": "XYZ", "active": "G54", "systems": [{"name", "values": [...], "rotation"}],
     "g92": [...]}; ``status`` a polled stat (or None: the file alone)."""
-    indexes = [LETTERS.index(letter) for letter in axes]
+    indexes = [AXIS_LETTERS.index(letter) for letter in axes]
     systems = []
     for number, name in enumerate(SYSTEMS):
         base = G5X_BASE + G5X_STEP * number

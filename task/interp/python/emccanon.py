@@ -10,6 +10,8 @@ behind moves that cutter compensation holds back, as the interpreter's own calls
 
 from __future__ import annotations
 
+from nml.axes import AXIS_LETTERS
+
 from .. import canon as _c
 from . import interpreter as _interpreter
 
@@ -225,7 +227,7 @@ def _component(getter: str, index: int):
     return call
 
 
-for _index, _axis in enumerate("XYZABCUVW"):
+for _index, _axis in enumerate(AXIS_LETTERS):
     globals()[f"GET_EXTERNAL_POSITION_{_axis}"] = _component("GET_EXTERNAL_POSITION", _index)
     globals()[f"GET_EXTERNAL_PROBE_POSITION_{_axis}"] = _component(
         "GET_EXTERNAL_PROBE_POSITION", _index
