@@ -34,7 +34,7 @@ from hal.api import HAL_BIT, HAL_IN, HAL_OUT, HAL_S32, HalError, component, shar
 from iocontrol.config import IoConfig
 from iocontrol.toolchanger import ToolChangeError, ToolChanger
 from iocontrol.tooldata import ToolDataWriter
-from iocontrol.tooltable import AXES, ToolEntry, ToolTable, ToolTableError
+from iocontrol.tooltable import ToolEntry, ToolTable, ToolTableError
 from nml import emc
 from nml.channels import EMC_ERROR, TOOL_COMMAND, TOOL_STATUS, Nml, load_config
 from nml.commands import Handlers, Refused, carry_out, handler
@@ -95,11 +95,6 @@ SAFE_OUTPUTS = {
 }
 
 
-def pose_to_list(pose: emc.EmcPose) -> list[float]:
-    """An EmcPose as the nine offsets X Y Z A B C U V W of a tool record."""
-    return [pose.tran.x, pose.tran.y, pose.tran.z, pose.a, pose.b, pose.c, pose.u, pose.v, pose.w]
-
-
 def entry_to_canon(entry: ToolEntry, out: emc.CANON_TOOL_TABLE) -> None:
     """Copy a tool record into an NML CANON_TOOL_TABLE (TOOL-006)."""
     out.toolno = entry.toolno
@@ -108,10 +103,7 @@ def entry_to_canon(entry: ToolEntry, out: emc.CANON_TOOL_TABLE) -> None:
     out.frontangle = entry.frontangle
     out.backangle = entry.backangle
     out.orientation = entry.orientation
-    pose = out.offset
-    pose.tran.x, pose.tran.y, pose.tran.z = entry.offset[:3]
-    for letter, value in zip(AXES[3:], entry.offset[3:], strict=True):
-        setattr(pose, letter.lower(), value)
+    out.offset.set(entry.offset)
 
 
 def load_tool_table(path: Path, is_random: bool) -> ToolTable:
@@ -525,7 +517,7 @@ class IoControl:
         self.changer.set_offset(
             msg.pocket,
             msg.toolno,
-            pose_to_list(msg.offset),
+            list(msg.offset.values()),
             msg.diameter,
             msg.frontangle,
             msg.backangle,

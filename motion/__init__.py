@@ -1,9 +1,9 @@
 """Motion controller core (SPEC MOT, KIN, ARCH-007/008/022).
 
 Plain Python objects with no process, NML or HAL dependency, driven once per servo
-period by the realtime motion component:
+period by the realtime motion component, on poses of ``nml.pose.Pose`` (x y z a b c
+u v w; messages carry them as ``nml.emc.EmcPose``):
 
-- ``motion.pose``: ``EmcPose`` (x y z a b c u v w) and axis letters.
 - ``motion.kinematics``: kinematics modules loaded by name, one file each named as
   LinuxCNC's module (trivkins, corexykins, xyzac-trt-kins, genserkins, ... and bipod);
   ``loadrt NAME`` finds them there.

@@ -39,7 +39,6 @@ from motion.indexer import LockingIndexers
 from motion.joint import Joint
 from motion.kinematics import Kinematics, KinematicsError, KinematicsType
 from motion.modes import COORD, FREE, TELEOP
-from motion.pose import AXIS_LETTERS, NUM_AXES, EmcPose
 from motion.spindle import OrientState, Spindle, SpindleControl, SpindleInputs
 from motion.status import QUEUE_FULL_MARGIN, MotionStatusRuns, StatusFilling
 from motion.teleop import Fit, JointLimiter, JointLimits, TeleopPlanner
@@ -47,7 +46,9 @@ from motion.tp import TermCond, TrajectoryPlanner
 from motion.tp.planner import ProbeType
 from motion.wheels import JogWheels, WheelInputs
 from nml import emc
+from nml.axes import AXIS_LETTERS, NUM_AXES
 from nml.commands import Handlers, Refused, handler
+from nml.pose import Pose
 
 _TERM_CONDS = {
     emc.EMC_TRAJ_TERM_COND.STOP: TermCond.STOP,
@@ -151,8 +152,8 @@ class MotionController(SpindleControl, JogWheels, StatusFilling):
         self.mode = FREE
         self.is_enabled = False
         self.is_override_limits = False
-        self.carte_pos_cmd = EmcPose()
-        self.carte_pos_fb = EmcPose()
+        self.carte_pos_cmd = Pose()
+        self.carte_pos_fb = Pose()
         self.traj_vel = 1.0  # EMC_TRAJ_SET_VELOCITY: default feed for moves without one
         self.traj_acc = 1.0
         self.max_vel = math.inf
@@ -166,7 +167,7 @@ class MotionController(SpindleControl, JogWheels, StatusFilling):
         # or motion starts afresh (_ENDS_A_REFUSED_PROGRAM).
         self.is_after_refused_move = False
         self.motion_type = 0
-        self.tool_offset = EmcPose()
+        self.tool_offset = Pose()
         self.is_feed_override_enabled = True
         self.is_feed_hold_enabled = True
         self.is_adaptive_feed_enabled = False
@@ -336,7 +337,7 @@ class MotionController(SpindleControl, JogWheels, StatusFilling):
             problem = self.indexers.check_jog(None, index)
             if problem and not isinstance(cmd, emc.EMC_JOG_STOP):
                 raise Refused(problem)  # (hook)
-            planner, name = self.axis_planners[index], f"axis {AXIS_LETTERS[index].upper()}"
+            planner, name = self.axis_planners[index], f"axis {AXIS_LETTERS[index]}"
             override = self.is_override_limits
         try:
             if isinstance(cmd, emc.EMC_JOG_STOP):
@@ -381,12 +382,12 @@ class MotionController(SpindleControl, JogWheels, StatusFilling):
             raise Refused("teleop vector needs teleop mode")
         if not self.is_enabled:
             raise Refused("teleop vector needs motion enabled")
-        vector = _pose(cmd.vector).as_tuple()
+        vector = cmd.vector.values()
         if any(vector) and self.is_jog_inhibited:
             raise Refused("jogging is inhibited (motion.jog-inhibit)")
         for index, value in enumerate(vector):
             if value and not self._has_axis(index):
-                raise Refused(f"axis {AXIS_LETTERS[index].upper()} is not used by this machine")
+                raise Refused(f"axis {AXIS_LETTERS[index]} is not used by this machine")
         self.teleop.set_velocity(vector)
 
     def _reset_teleop(self) -> None:
@@ -397,7 +398,7 @@ class MotionController(SpindleControl, JogWheels, StatusFilling):
         self.teleop.reset(pose)
         joints = [j.pos_cmd for j in self.kins_joints]
         if pose != list(self.carte_pos_cmd):  # (external offsets held: joints without them)
-            joints = self.kins.inverse(EmcPose(*pose))
+            joints = self.kins.inverse(Pose(*pose))
         self.joint_limiter.reset(joints)
 
     def _stop_teleop(self) -> None:
@@ -449,7 +450,7 @@ class MotionController(SpindleControl, JogWheels, StatusFilling):
             if not planner.is_enabled:
                 planner.target = value
         vector.pos = end.copy()
-        pose = EmcPose(*end.tolist())
+        pose = Pose(*end.tolist())
         self._set_joints_from_pose(self.eoffsets.add(pose, dt))  # (hook: external offsets)
         if self.eoffsets.planners:
             self.joint_limiter.advance(self.kins.inverse(pose))
@@ -477,7 +478,7 @@ class MotionController(SpindleControl, JogWheels, StatusFilling):
         )
 
     def _inverse_array(self, pose: np.ndarray) -> list[float]:
-        return self.kins.inverse(EmcPose(*pose.tolist()))
+        return self.kins.inverse(Pose(*pose.tolist()))
 
     # ---------------------------------------------------------------- coordinated moves
     def _require_coord(self) -> str | None:
@@ -489,7 +490,7 @@ class MotionController(SpindleControl, JogWheels, StatusFilling):
             return "motion queue is full"
         return None
 
-    def _check_soft_limits(self, end: EmcPose, what: str) -> str | None:
+    def _check_soft_limits(self, end: Pose, what: str) -> str | None:
         """Refuse a move whose end is outside an axis's or a joint's limits, in LinuxCNC's
         words (one line per limit crossed) (MOT-072)."""
         if self.is_override_limits:
@@ -497,7 +498,7 @@ class MotionController(SpindleControl, JogWheels, StatusFilling):
         line = self.next_motion_id
         problems = []
         for index, value in enumerate(end):
-            letter = AXIS_LETTERS[index].upper()
+            letter = AXIS_LETTERS[index]
             if value > self.axis_max_limit[index]:
                 problems.append(f"{what} on line {line} would exceed {letter}'s positive limit")
             elif value < self.axis_min_limit[index]:
@@ -517,7 +518,7 @@ class MotionController(SpindleControl, JogWheels, StatusFilling):
 
     @handler(emc.EMC_TRAJ_LINEAR_MOVE)
     def _linear_move(self, cmd: emc.EMC_TRAJ_LINEAR_MOVE) -> None:
-        end = _pose(cmd.end)
+        end = cmd.end.pose()
         problem = self._require_coord() or self._check_soft_limits(end, "Linear move")
         if problem:
             raise Refused(problem)
@@ -549,7 +550,7 @@ class MotionController(SpindleControl, JogWheels, StatusFilling):
 
     @handler(emc.EMC_TRAJ_CIRCULAR_MOVE)
     def _circular_move(self, cmd: emc.EMC_TRAJ_CIRCULAR_MOVE) -> None:
-        end = _pose(cmd.end)
+        end = cmd.end.pose()
         problem = self._require_coord() or self._check_soft_limits(end, "Circular move")
         if problem:
             raise Refused(problem)
@@ -584,7 +585,7 @@ class MotionController(SpindleControl, JogWheels, StatusFilling):
 
     @handler(emc.EMC_TRAJ_PROBE)
     def _probe(self, cmd: emc.EMC_TRAJ_PROBE) -> None:
-        end = _pose(cmd.pos)
+        end = cmd.pos.pose()
         problem = self._require_coord() or self._check_soft_limits(end, "Probe move")
         if problem:
             raise Refused(problem)
@@ -832,7 +833,7 @@ class MotionController(SpindleControl, JogWheels, StatusFilling):
     def _settings(self, cmd: emc.NMLmsg) -> None:
         """Settings kept for status and later moves: tool offset, override enables."""
         if isinstance(cmd, emc.EMC_TRAJ_SET_OFFSET):
-            self.tool_offset = _pose(cmd.offset)
+            self.tool_offset = cmd.offset.pose()
         elif isinstance(cmd, emc.EMC_TRAJ_SET_FO_ENABLE):
             self.is_feed_override_enabled = bool(cmd.mode)
         elif isinstance(cmd, emc.EMC_TRAJ_SET_FH_ENABLE):
@@ -847,7 +848,7 @@ class MotionController(SpindleControl, JogWheels, StatusFilling):
     @handler(emc.EMC_TRAJ_RIGID_TAP)
     def _rigid_tap(self, cmd: emc.EMC_TRAJ_RIGID_TAP) -> None:
         """G33.1: in following the spindle, spindle reversed, out again (MOT-062)."""
-        end = _pose(cmd.pos)
+        end = cmd.pos.pose()
         problem = self._require_coord() or self._check_soft_limits(end, "Rigid tap move")
         if problem:
             raise Refused(problem)
@@ -892,7 +893,7 @@ class MotionController(SpindleControl, JogWheels, StatusFilling):
             error = self.tp.take_error()
             if error:
                 self.errors.append(error)
-            pose = EmcPose(*position.tolist())
+            pose = Pose(*position.tolist())
             if self.eoffsets.planners:  # (hook) external offsets on top
                 pose = self.eoffsets.add(pose, dt)
             self._set_joints_from_pose(pose)
@@ -918,7 +919,7 @@ class MotionController(SpindleControl, JogWheels, StatusFilling):
 
     # ---------------------------------------------------------------- jog wheels
     # ---------------------------------------------------------------- spindle, per period
-    def _set_joints_from_pose(self, pose: EmcPose) -> None:
+    def _set_joints_from_pose(self, pose: Pose) -> None:
         try:
             targets = self.kins.inverse(pose)
         except KinematicsError as exc:
@@ -928,7 +929,7 @@ class MotionController(SpindleControl, JogWheels, StatusFilling):
             joint.pos_cmd = target
         self.carte_pos_cmd = pose
 
-    def _forward(self, joints: list[float]) -> EmcPose:
+    def _forward(self, joints: list[float]) -> Pose:
         try:
             return self.kins.forward(joints)
         except KinematicsError:
@@ -979,12 +980,6 @@ class MotionController(SpindleControl, JogWheels, StatusFilling):
             xyz = math.hypot(*speeds[:3])
             return xyz or math.hypot(*speeds[3:])
         return 0.0
-
-
-def _pose(pose: emc.EmcPose) -> EmcPose:
-    # all nine values in one unpack (tran's X Y Z, then A B C U V W): nine field reads
-    # through the message's views cost 3x more, and every queued move pays it
-    return EmcPose(*pose.to_flat())
 
 
 # What ends a program whose move motion refused: task's abort, or a fresh start (motion

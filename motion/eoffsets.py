@@ -31,7 +31,8 @@ import math
 from dataclasses import dataclass
 
 from motion.free import FreePlanner
-from motion.pose import NUM_AXES, EmcPose
+from nml.axes import NUM_AXES
+from nml.pose import Pose
 
 MAX_RATIO = 0.9
 
@@ -140,7 +141,7 @@ class ExternalOffsets:
             if self.request[axis] != planner.target or not planner.is_active:
                 planner.move_to(self.request[axis], planner.max_vel)
 
-    def add(self, pose: EmcPose, dt: float) -> EmcPose:
+    def add(self, pose: Pose, dt: float) -> Pose:
         """Coordinated and teleop mode: step the offsets and add them to the planners'
         ``pose``, holding each axis at its soft limits."""
         if not self.planners:
@@ -167,9 +168,9 @@ class ExternalOffsets:
                 is_active = True
         self.is_limited = is_limited
         self.is_active = is_active
-        return EmcPose(*out)
+        return Pose(*out)
 
-    def remove(self, pose: EmcPose) -> list[float]:
+    def remove(self, pose: Pose) -> list[float]:
         """The planners' pose of a commanded pose that holds the offsets."""
         values = list(pose.as_tuple())
         for axis, planner in self.planners.items():

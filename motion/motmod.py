@@ -39,13 +39,14 @@ from motion.controller import (
 from motion.homing import load_homing
 from motion.kinematics import Kinematics, KinematicsError, fit_joints
 from motion.modules import ModuleInterfaceError
-from motion.pose import AXIS_LETTERS
 from motion.safety import DEFAULT_HEARTBEAT_TIMEOUT_S, MotionSafety
 from motion.tp import load_planner
 from nml import emc
+from nml.axes import AXIS_LETTERS
 from nml.channels import EMC_ERROR, MOTION_COMMAND, MOTION_STATUS, Nml, load_config
 from nml.commands import InternalError, Refused, carry_out, echo, internal_error
 from nml.errors import NmlError, NmlTimeoutError
+from nml.pose import AXIS_NAMES
 
 NML_PROCESS = "motion"
 # The command handler takes commands while the next one, costing as much as the longest
@@ -214,7 +215,7 @@ class Motmod:
         for axis, joint in settings.locking_joints.items():
             problem = self.controller.indexers.set_axis_joint(axis, joint)
             if problem:
-                raise HalError(f"motmod: [AXIS_{AXIS_LETTERS[axis].upper()}]: {problem}")
+                raise HalError(f"motmod: [AXIS_{AXIS_LETTERS[axis]}]: {problem}")
         hal = host.hal
         io = {"num_dio": options["num_dio"], "num_aio": options["num_aio"]}
         self.motion = MotionPins.create(hal, comp, "motion", io)
@@ -232,10 +233,8 @@ class Motmod:
             PosthomePins.create(hal, comp, f"joint.{i}")
             for i in range(extra.first, extra.first + extra.count)
         ]
-        letters = [AXIS_LETTERS[i] for i in range(9) if getattr(kins, "axis_mask", 0b111) >> i & 1]
-        self.axes = {
-            AXIS_LETTERS.index(c): AxisPins.create(hal, comp, f"axis.{c}") for c in letters
-        }
+        letters = [AXIS_NAMES[i] for i in range(9) if getattr(kins, "axis_mask", 0b111) >> i & 1]
+        self.axes = {AXIS_NAMES.index(c): AxisPins.create(hal, comp, f"axis.{c}") for c in letters}
         self.spindles = [
             SpindlePins.create(hal, comp, f"spindle.{i}") for i in range(options["num_spindles"])
         ]
@@ -555,7 +554,7 @@ class Motmod:
         self.motion.eoffset_limited = eoffsets.is_limited
         status = self.status
         status.external_offsets_applied = eoffsets.is_active
-        status.eoffset_pose.from_flat(offsets)
+        status.eoffset_pose.set(offsets)
         self.pending_errors.extend(eoffsets.notes)
         eoffsets.notes.clear()
 
@@ -592,7 +591,7 @@ def _ini_settings() -> IniSettings:
         value = ini.get_float("EMCMOT", "HEARTBEAT_TIMEOUT")
         if value is not None:
             settings.heartbeat_timeout = value
-        for axis, letter in enumerate(AXIS_LETTERS):
+        for axis, letter in enumerate(AXIS_NAMES):
             section = f"AXIS_{letter.upper()}"
             ratio = ini.get_float(section, "OFFSET_AV_RATIO")
             if ratio:

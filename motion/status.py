@@ -25,8 +25,8 @@ import struct
 import numpy as np
 
 from motion.modes import COORD
-from motion.pose import NUM_AXES
 from nml import emc
+from nml.axes import NUM_AXES
 from nml.message import _flat_codes  # nml's dtype -> struct codes, so both agree
 
 # traj.queueFull is reported while fewer planner slots than this are free (like LinuxCNC's

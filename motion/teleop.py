@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from motion.free import braking_speed
-from motion.pose import NUM_AXES
+from nml.axes import NUM_AXES
 
 # relative: rounding in finite differences of joint positions never counts as a limit crossed
 LIMIT_TOLERANCE = 1e-7

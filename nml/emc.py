@@ -25,6 +25,7 @@ holds the subsystem's value (task state, spindle state).
 from __future__ import annotations
 
 import enum
+from collections.abc import Iterable
 
 from nml.message import (
     RCS_CMD_MSG,
@@ -43,6 +44,7 @@ from nml.message import (
     u32,
     u64,
 )
+from nml.pose import Pose
 
 # ============================================================================ sizes
 
@@ -338,7 +340,9 @@ class PmCartesian(Struct):
 
 
 class EmcPose(Struct):
-    """A position of the nine world axes: ``tran`` holds X Y Z, then A B C and U V W."""
+    """A pose (``nml.pose.Pose``) in messages, in LinuxCNC's layout: ``tran`` holds X Y Z,
+    then A B C and U V W. Code computes with ``Pose``; this is only its wire form, read
+    and written whole (each a single copy of the nine numbers)."""
 
     tran: PmCartesian
     a: f64
@@ -347,6 +351,24 @@ class EmcPose(Struct):
     u: f64
     v: f64
     w: f64
+
+    @classmethod
+    def of(cls, values: Iterable[float]) -> EmcPose:
+        """The wire form of a ``Pose`` (or of nine numbers X ... W)."""
+        return cls.from_flat(tuple(values))
+
+    def values(self) -> tuple[float, ...]:
+        """The nine numbers X Y Z A B C U V W."""
+        return self.flat_format.unpack(self._arr.tobytes())
+
+    def pose(self) -> Pose:
+        # all nine in one unpack: nine reads through the message's field views cost 3x
+        # more, and motion pays it for every queued move
+        return Pose(*self.flat_format.unpack(self._arr.tobytes()))
+
+    def set(self, values: Iterable[float]) -> None:
+        """Write a ``Pose`` (or nine numbers X ... W) in place."""
+        self.byte_view()[:] = self.flat_format.pack(*values)
 
 
 class StateTag(Struct):

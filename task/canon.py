@@ -89,11 +89,11 @@ from typing import IO
 from iocontrol.tooldata import ToolDataError, ToolDataReader
 from iocontrol.tooltable import CANON_POCKETS_MAX, ToolEntry, ToolTable
 from nml import emc
+from nml.axes import NUM_AXES
 from nml.message import RCS_CMD_MSG
 from task.interp import canon as C  # noqa: N812  (C.PLANE_XY reads like CANON_PLANE_XY)
 
 MM_PER_INCH = 25.4
-NUM_AXES = 9
 LINEAR_AXES = (0, 1, 2, 6, 7, 8)  # X Y Z U V W
 ANGULAR_AXES = (3, 4, 5)  # A B C
 # displacements below this (machine units) do not count as motion (posemath's CART_FUZZ)
@@ -151,16 +151,6 @@ def _rotate(x: float, y: float, degrees: float) -> tuple[float, float]:
     t = math.radians(degrees)
     cos_t, sin_t = math.cos(t), math.sin(t)
     return x * cos_t - y * sin_t, x * sin_t + y * cos_t
-
-
-def _pose(values: Sequence[float]) -> emc.EmcPose:
-    x, y, z, a, b, c, u, v, w = values
-    return emc.EmcPose(tran=emc.PmCartesian(x=x, y=y, z=z), a=a, b=b, c=c, u=u, v=v, w=w)
-
-
-def _pose_values(pose: emc.EmcPose) -> list[float]:
-    t = pose.tran
-    return [t.x, t.y, t.z, pose.a, pose.b, pose.c, pose.u, pose.v, pose.w]
 
 
 def _ratio(length: float, seconds: float, fallback: float) -> float:
@@ -386,7 +376,7 @@ class TaskCanon:
         if limits.vel and limits.acc:
             msg = emc.EMC_TRAJ_LINEAR_MOVE(
                 type=motion_type,
-                end=_pose(end),
+                end=emc.EmcPose.of(end),
                 vel=limits.vel,
                 ini_maxvel=limits.vel,
                 acc=limits.acc,
@@ -445,7 +435,7 @@ class TaskCanon:
         if vel and limits.acc:
             msg = emc.EMC_TRAJ_LINEAR_MOVE(
                 type=emc.EMC_MOTION_TYPE.FEED,
-                end=_pose(end),
+                end=emc.EmcPose.of(end),
                 vel=vel,
                 ini_maxvel=limits.vel,
                 acc=limits.acc,
@@ -465,7 +455,7 @@ class TaskCanon:
         vel = self._feed_velocity(limits)
         if vel and limits.acc:
             msg = emc.EMC_TRAJ_PROBE(
-                pos=_pose(end),
+                pos=emc.EmcPose.of(end),
                 type=emc.EMC_MOTION_TYPE.PROBING,
                 vel=vel,
                 ini_maxvel=limits.vel,
@@ -482,7 +472,11 @@ class TaskCanon:
         limits = self._straight(end)
         if limits.vel and limits.acc:
             msg = emc.EMC_TRAJ_RIGID_TAP(
-                pos=_pose(end), vel=limits.vel, ini_maxvel=limits.vel, acc=limits.acc, scale=scale
+                pos=emc.EmcPose.of(end),
+                vel=limits.vel,
+                ini_maxvel=limits.vel,
+                acc=limits.acc,
+                scale=scale,
             )
             self._queue_move(line, msg)
 
@@ -564,7 +558,7 @@ class TaskCanon:
         if rotation == 0:
             msg: RCS_CMD_MSG = emc.EMC_TRAJ_LINEAR_MOVE(
                 type=emc.EMC_MOTION_TYPE.ARC,
-                end=_pose(end),
+                end=emc.EmcPose.of(end),
                 vel=vel,
                 ini_maxvel=v_max,
                 acc=a_max,
@@ -573,7 +567,7 @@ class TaskCanon:
             )
         else:
             msg = emc.EMC_TRAJ_CIRCULAR_MOVE(
-                end=_pose(end),
+                end=emc.EmcPose.of(end),
                 center=emc.PmCartesian(x=center[0], y=center[1], z=center[2]),
                 normal=emc.PmCartesian(x=normal[0], y=normal[1], z=normal[2]),
                 turn=rotation - 1 if rotation > 0 else rotation,
@@ -734,13 +728,13 @@ class TaskCanon:
         self.g5x_index = index
         self._flush()
         self._update_css_spindles()
-        self._queue(emc.EMC_TRAJ_SET_G5X(g5x_index=index, origin=_pose(self.g5x)))
+        self._queue(emc.EMC_TRAJ_SET_G5X(g5x_index=index, origin=emc.EmcPose.of(self.g5x)))
 
     def SET_G92_OFFSET(self, x, y, z, a, b, c, u=0.0, v=0.0, w=0.0) -> None:
         self.g92 = self._from_program((x, y, z, a, b, c, u, v, w))
         self._flush()
         self._update_css_spindles()
-        self._queue(emc.EMC_TRAJ_SET_G92(origin=_pose(self.g92)))
+        self._queue(emc.EMC_TRAJ_SET_G92(origin=emc.EmcPose.of(self.g92)))
 
     def USE_LENGTH_UNITS(self, units: int) -> None:
         self.program_units = units
@@ -870,7 +864,7 @@ class TaskCanon:
         msg = emc.EMC_TOOL_SET_OFFSET(
             pocket=idx,
             toolno=toolno,
-            offset=_pose(offset),
+            offset=emc.EmcPose.of(offset),
             diameter=diameter,
             frontangle=frontangle,
             backangle=backangle,
@@ -888,7 +882,7 @@ class TaskCanon:
         self._flush()
         self.tool_offset = self._from_program(offset)
         self._update_css_spindles()
-        self._queue(emc.EMC_TRAJ_SET_OFFSET(offset=_pose(self.tool_offset)))
+        self._queue(emc.EMC_TRAJ_SET_OFFSET(offset=emc.EmcPose.of(self.tool_offset)))
 
     def CHANGE_TOOL(self, slot: int) -> None:
         """M6: rapid to [EMCIO]TOOL_CHANGE_POSITION if there is one, then load the tool."""
@@ -1111,16 +1105,16 @@ class TaskCanon:
         an executed queue or an abort)."""
         self._drop()
         motion = self._stat.motion
-        position = _pose_values(motion.traj.position)
+        position = list(motion.traj.position.values())
         if motion.external_offsets_applied:
-            eoffset = _pose_values(motion.eoffset_pose)
+            eoffset = list(motion.eoffset_pose.values())
             position = [position[k] - eoffset[k] for k in range(NUM_AXES)]
         self.end_point = position
         return self.to_program(position)
 
     def GET_EXTERNAL_PROBE_POSITION(self) -> list[float]:
         self._flush()
-        position = self.to_program(_pose_values(self._stat.motion.traj.probedPosition))
+        position = self.to_program(list(self._stat.motion.traj.probedPosition.values()))
         if self._probe_file is not None and position != self._last_probed:
             self._probe_file.write(" ".join(f"{v:f}" for v in position) + "\n")
             self._last_probed = position

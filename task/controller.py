@@ -30,7 +30,7 @@ import shlex
 import subprocess
 import time
 from collections import deque
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable
 
 from cnc.ini import IniFile
 from cnc.inischema import io_program
@@ -1129,9 +1129,9 @@ class Task:
         params = interp.parameters
         system = int(params[5220]) or 1
         base = 5201 + 20 * system
-        _store(task.g5x_offset, params[base : base + 9])
+        task.g5x_offset.set(params[base : base + 9])
         task.g5x_index = system
-        _store(task.g92_offset, params[5211:5220])
+        task.g92_offset.set(params[5211:5220])
         task.ini_filename = emc.fit_text(self.ini.path)
         self.publish_due = time.monotonic() + PUBLISH_AT_LEAST_S
         try:
@@ -1199,11 +1199,6 @@ def _writable_dirs(ini: IniFile, setup: MachineSetup) -> list[str]:
     extra = ini.find("RS274NGC", "WRITABLE_DIRS") or ""
     folders += [setup.resolve(name) for name in extra.split(":") if name.strip()]
     return folders
-
-
-def _store(pose: emc.EmcPose, values: Sequence[float]) -> None:
-    pose.tran.x, pose.tran.y, pose.tran.z = values[0], values[1], values[2]
-    pose.a, pose.b, pose.c, pose.u, pose.v, pose.w = values[3:9]
 
 
 # What task tells iocontrol about E-stop and aborts: nothing to do without one.

@@ -24,7 +24,7 @@ from motion.kinematics import (
     realtime_module,
     switchkins_types,
 )
-from motion.pose import EmcPose
+from nml.pose import Pose
 
 REQUIRED = "xyzbcw"
 
@@ -49,14 +49,14 @@ class FiveAxis:
         self.pins = pins
         self.j = {c: joints.joint_of(c) for c in "xyzabcuvw"}
 
-    def forward(self, joints: Sequence[float]) -> EmcPose:
+    def forward(self, joints: Sequence[float]) -> Pose:
         j, pivot = self.j, self.pins.pivot_length
         rx, ry, rz = _arm(pivot + joints[j["w"]], joints[j["c"]], 180.0 - joints[j["b"]])
 
         def value(letter: str) -> float:
             return joints[j[letter]] if j[letter] != -1 else 0.0
 
-        return EmcPose(
+        return Pose(
             x=joints[j["x"]] + rx,
             y=joints[j["y"]] + ry,
             z=joints[j["z"]] + pivot + rz,
@@ -68,10 +68,10 @@ class FiveAxis:
             w=joints[j["w"]],
         )
 
-    def inverse(self, pose: EmcPose) -> list[float]:
+    def inverse(self, pose: Pose) -> list[float]:
         j, pivot = self.j, self.pins.pivot_length
         rx, ry, rz = _arm(pivot + pose.w, pose.c, 180.0 - pose.b)
-        result = EmcPose(
+        result = Pose(
             x=pose.x - rx,
             y=pose.y - ry,
             z=pose.z - pivot - rz,

@@ -5,7 +5,7 @@ A kinematics module's ``create(hal=None, **params)`` returns an object with this
 (the Python form of KIN-014):
 
 - ``num_joints``: how many joints the module maps.
-- ``forward(joints) -> EmcPose``: joints to world; raises ``SingularityError`` where the
+- ``forward(joints) -> Pose``: joints to world; raises ``SingularityError`` where the
   joints have no single cartesian equivalent (KIN-012), and the caller keeps its old pose.
 - ``inverse(pose) -> list[float]``: world to joints; raises ``KinematicsError`` if unreachable.
 - ``kinematics_type() -> KinematicsType`` (KIN-018).
@@ -38,7 +38,7 @@ from typing import Any, Protocol, runtime_checkable
 from hal.api import RtComponent, pin
 from hal.core import HalError
 from motion.modules import ModuleInterfaceError, require
-from motion.pose import AXIS_LETTERS, EmcPose
+from nml.pose import AXIS_NAMES, Pose
 
 REQUIRED_FUNCTIONS = ("forward", "inverse", "kinematics_type", "home")
 MAX_JOINTS = 16  # EMCMOT_MAX_JOINTS
@@ -75,13 +75,13 @@ class SingularityError(KinematicsError):
 class Kinematics(Protocol):
     num_joints: int
 
-    def forward(self, joints: Sequence[float]) -> EmcPose: ...
+    def forward(self, joints: Sequence[float]) -> Pose: ...
 
-    def inverse(self, pose: EmcPose) -> list[float]: ...
+    def inverse(self, pose: Pose) -> list[float]: ...
 
     def kinematics_type(self) -> KinematicsType: ...
 
-    def home(self, pose: EmcPose, joints: Sequence[float]) -> tuple[EmcPose, list[float]]: ...
+    def home(self, pose: Pose, joints: Sequence[float]) -> tuple[Pose, list[float]]: ...
 
 
 def check_joints(joints: Sequence[float], count: int) -> list[float]:
@@ -95,7 +95,7 @@ def check_joints(joints: Sequence[float], count: int) -> list[float]:
     return values
 
 
-def check_pose(pose: EmcPose) -> None:
+def check_pose(pose: Pose) -> None:
     if not pose.is_finite():
         raise KinematicsError(f"pose is not finite: {pose}")
 
@@ -112,7 +112,7 @@ class NineJointKins:
     def kinematics_type(self) -> KinematicsType:
         return KinematicsType.BOTH
 
-    def home(self, pose: EmcPose, joints: Sequence[float]) -> tuple[EmcPose, list[float]]:
+    def home(self, pose: Pose, joints: Sequence[float]) -> tuple[Pose, list[float]]:
         values = check_joints(joints, self.num_joints)[: self.num_joints]
         return self.forward(values), values  # type: ignore[attr-defined]
 
@@ -164,7 +164,7 @@ class JointMap:
         letters = "".join(coordinates.split()).lower()
         if not letters:
             raise KinematicsError(f"{name}: coordinates= is empty")
-        bad = sorted({c for c in letters if c not in AXIS_LETTERS})
+        bad = sorted({c for c in letters if c not in AXIS_NAMES})
         if bad:
             raise KinematicsError(
                 f"{name}: coordinates={coordinates!r} has unknown axis letters {bad}"
@@ -177,7 +177,7 @@ class JointMap:
             raise KinematicsError(f"{name}: duplicates not allowed in coordinates={coordinates}")
         self.letters = letters
         self.num_joints = len(letters)
-        self.axis_of_joint = [AXIS_LETTERS.index(c) for c in letters]
+        self.axis_of_joint = [AXIS_NAMES.index(c) for c in letters]
         self.axis_mask = 0
         #: axis index -> its principal joint (first given it)
         self.principal: dict[int, int] = {}
@@ -187,18 +187,18 @@ class JointMap:
 
     def joint_of(self, letter: str) -> int:
         """The principal joint of an axis letter, -1 when the axis has none."""
-        return self.principal.get(AXIS_LETTERS.index(letter.lower()), -1)
+        return self.principal.get(AXIS_NAMES.index(letter.lower()), -1)
 
-    def to_pose(self, joints: Sequence[float]) -> EmcPose:
+    def to_pose(self, joints: Sequence[float]) -> Pose:
         """Identity forward kinematics (unmapped axes are 0)."""
-        world = [0.0] * len(AXIS_LETTERS)
+        world = [0.0] * len(AXIS_NAMES)
         for axis, joint in self.principal.items():
             world[axis] = joints[joint]
-        return EmcPose(*world)
+        return Pose(*world)
 
-    def to_joints(self, pose: EmcPose | Sequence[float]) -> list[float]:
+    def to_joints(self, pose: Pose | Sequence[float]) -> list[float]:
         """Identity inverse kinematics: each joint takes its axis's value."""
-        world = pose.as_tuple() if isinstance(pose, EmcPose) else tuple(pose)
+        world = pose.as_tuple() if isinstance(pose, Pose) else tuple(pose)
         return [world[axis] for axis in self.axis_of_joint]
 
 
@@ -232,10 +232,10 @@ class Identity:
         self.map = joints
         self.num_joints = joints.num_joints
 
-    def forward(self, joints: Sequence[float]) -> EmcPose:
+    def forward(self, joints: Sequence[float]) -> Pose:
         return self.map.to_pose(joints)
 
-    def inverse(self, pose: EmcPose) -> list[float]:
+    def inverse(self, pose: Pose) -> list[float]:
         return self.map.to_joints(pose)
 
 
@@ -247,11 +247,11 @@ class UserK(Identity):
         super().__init__(joints)
         self.pins = pins
 
-    def forward(self, joints: Sequence[float]) -> EmcPose:
+    def forward(self, joints: Sequence[float]) -> Pose:
         self.pins.fct = self.pins.fct + 1
         return super().forward(joints)
 
-    def inverse(self, pose: EmcPose) -> list[float]:
+    def inverse(self, pose: Pose) -> list[float]:
         self.pins.ict = self.pins.ict + 1
         return super().inverse(pose)
 
@@ -286,17 +286,17 @@ class SwitchKins:
         if restart is not None:
             restart()
 
-    def forward(self, joints: Sequence[float]) -> EmcPose:
+    def forward(self, joints: Sequence[float]) -> Pose:
         return self.types[self.kinstype].forward(check_joints(joints, self.num_joints))
 
-    def inverse(self, pose: EmcPose) -> list[float]:
+    def inverse(self, pose: Pose) -> list[float]:
         check_pose(pose)
         return self.types[self.kinstype].inverse(pose)
 
     def kinematics_type(self) -> KinematicsType:
         return KinematicsType.BOTH
 
-    def home(self, pose: EmcPose, joints: Sequence[float]) -> tuple[EmcPose, list[float]]:
+    def home(self, pose: Pose, joints: Sequence[float]) -> tuple[Pose, list[float]]:
         values = check_joints(joints, self.num_joints)[: self.num_joints]
         return self.forward(values), values
 
@@ -403,17 +403,17 @@ class JointCountFit:
     def __getattr__(self, name: str) -> Any:
         return getattr(self.kins, name)
 
-    def forward(self, joints: Sequence[float]) -> EmcPose:
+    def forward(self, joints: Sequence[float]) -> Pose:
         return self.kins.forward([*joints[: self.num_joints], *[0.0] * self._missing])
 
-    def inverse(self, pose: EmcPose) -> list[float]:
+    def inverse(self, pose: Pose) -> list[float]:
         values = self.kins.inverse(pose)[: self.num_joints]
         return values + [0.0] * (self.num_joints - len(values))
 
     def kinematics_type(self) -> KinematicsType:
         return self.kins.kinematics_type()
 
-    def home(self, pose: EmcPose, joints: Sequence[float]) -> tuple[EmcPose, list[float]]:
+    def home(self, pose: Pose, joints: Sequence[float]) -> tuple[Pose, list[float]]:
         values = [*joints[: self.num_joints], *[0.0] * self._missing]
         home_pose, home_joints = self.kins.home(pose, values)
         return home_pose, home_joints[: self.num_joints]

@@ -23,7 +23,7 @@ from motion.kinematics import (
     make_pins,
     switchkins_types,
 )
-from motion.pose import EmcPose
+from nml.pose import Pose
 
 
 class TrtPins(RtComponent):
@@ -53,7 +53,7 @@ class _Trt:
 class XyzacTrt(_Trt):
     """Tilting table A with rotary table C."""
 
-    def forward(self, joints: Sequence[float]) -> EmcPose:
+    def forward(self, joints: Sequence[float]) -> Pose:
         p = self.pins
         rx, ry, rz = p.x_rot_point, p.y_rot_point, p.z_rot_point
         dy, dz = p.y_offset, p.z_offset + p.tool_offset
@@ -63,7 +63,7 @@ class XyzacTrt(_Trt):
         z = joints[self.jz] - dz - rz
         sa, ca, sc, cc = math.sin(a), math.cos(a), math.sin(c), math.cos(c)
         value = self._value
-        return EmcPose(
+        return Pose(
             x=cc * x + sc * ca * y + sc * sa * z + sc * dy + rx,
             y=-sc * x + cc * ca * y + cc * sa * z + cc * dy + ry,
             z=0 - sa * y + ca * z + dz + rz,
@@ -75,14 +75,14 @@ class XyzacTrt(_Trt):
             w=value(joints, self.jw),
         )
 
-    def inverse(self, pose: EmcPose) -> list[float]:
+    def inverse(self, pose: Pose) -> list[float]:
         p = self.pins
         rx, ry, rz = p.x_rot_point, p.y_rot_point, p.z_rot_point
         dy, dz = p.y_offset, p.z_offset + p.tool_offset
         a, c = pose.a * TO_RAD, pose.c * TO_RAD
         x, y, z = pose.x - rx, pose.y - ry, pose.z - rz
         sa, ca, sc, cc = math.sin(a), math.cos(a), math.sin(c), math.cos(c)
-        result = EmcPose(
+        result = Pose(
             x=cc * x - sc * y + rx,
             y=sc * ca * x + cc * ca * y - sa * z - ca * dy + sa * dz + dy + ry,
             z=sc * sa * x + cc * sa * y + ca * z - sa * dy - ca * dz + dz + rz,
@@ -99,7 +99,7 @@ class XyzacTrt(_Trt):
 class XyzbcTrt(_Trt):
     """Tilting table B with rotary table C."""
 
-    def forward(self, joints: Sequence[float]) -> EmcPose:
+    def forward(self, joints: Sequence[float]) -> Pose:
         p = self.pins
         rx, ry, rz = p.x_rot_point, p.y_rot_point, p.z_rot_point
         dx, dz = p.x_offset, p.z_offset + p.tool_offset
@@ -109,7 +109,7 @@ class XyzbcTrt(_Trt):
         z = joints[self.jz] - dz - rz
         sb, cb, sc, cc = math.sin(b), math.cos(b), math.sin(c), math.cos(c)
         value = self._value
-        return EmcPose(
+        return Pose(
             x=cc * cb * x + sc * y - cc * sb * z + cc * dx + rx,
             y=-sc * cb * x + cc * y + sc * sb * z - sc * dx + ry,
             z=sb * x + cb * z + dz + rz,
@@ -121,7 +121,7 @@ class XyzbcTrt(_Trt):
             w=value(joints, self.jw),
         )
 
-    def inverse(self, pose: EmcPose) -> list[float]:
+    def inverse(self, pose: Pose) -> list[float]:
         p = self.pins
         rx, ry, rz = p.x_rot_point, p.y_rot_point, p.z_rot_point
         dx, dz = p.x_offset, p.z_offset + p.tool_offset
@@ -130,7 +130,7 @@ class XyzbcTrt(_Trt):
         sb, cb, sc, cc = math.sin(b), math.cos(b), math.sin(c), math.cos(c)
         dpx = -cb * dx - sb * dz + dx
         dpz = sb * dx - cb * dz + dz
-        result = EmcPose(
+        result = Pose(
             x=cc * cb * x - sc * cb * y + sb * z + dpx + rx,
             y=sc * x + cc * y + ry,
             z=-cc * sb * x + sc * sb * y + cb * z + dpz + rz,

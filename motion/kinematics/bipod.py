@@ -17,7 +17,7 @@ from motion.kinematics import (
     check_joints,
     check_pose,
 )
-from motion.pose import EmcPose
+from nml.pose import Pose
 
 
 class Bipod:
@@ -29,7 +29,7 @@ class Bipod:
             raise KinematicsError(f"bipod: Bx must be a positive distance, got {bx}")
         self.bx = bx
 
-    def forward(self, joints: Sequence[float]) -> EmcPose:
+    def forward(self, joints: Sequence[float]) -> Pose:
         j0, j1 = check_joints(joints, 2)[:2]
         ad2, bd2 = j0 * j0, j1 * j1
         x = (ad2 - bd2 + self.bx * self.bx) / (2 * self.bx)
@@ -38,16 +38,16 @@ class Bipod:
             raise SingularityError(
                 f"bipod: cable lengths {j0:g}, {j1:g} cannot meet (y^2 = {y2:g} < 0)"
             )
-        return EmcPose(x=x, y=math.sqrt(y2))
+        return Pose(x=x, y=math.sqrt(y2))
 
-    def inverse(self, pose: EmcPose) -> list[float]:
+    def inverse(self, pose: Pose) -> list[float]:
         check_pose(pose)
         return [math.hypot(pose.x, pose.y), math.hypot(self.bx - pose.x, pose.y)]
 
     def kinematics_type(self) -> KinematicsType:
         return KinematicsType.BOTH
 
-    def home(self, pose: EmcPose, joints: Sequence[float]) -> tuple[EmcPose, list[float]]:
+    def home(self, pose: Pose, joints: Sequence[float]) -> tuple[Pose, list[float]]:
         # any reachable start is acceptable: keep the given joints if they are valid (KIN-015)
         values = check_joints(joints, 2)[:2]
         return self.forward(values), values

@@ -18,7 +18,7 @@ from motion.kinematics import (
     check_pose,
     realtime_module,
 )
-from motion.pose import AXIS_LETTERS, EmcPose
+from nml.pose import AXIS_NAMES, Pose
 
 
 class CoreXY:
@@ -26,15 +26,15 @@ class CoreXY:
     joint_axes = list(range(9))  # (joints 0 and 1 together drive X and Y)
     axis_mask = 0x1FF
 
-    def forward(self, joints: Sequence[float]) -> EmcPose:
+    def forward(self, joints: Sequence[float]) -> Pose:
         j = check_joints(joints, self.num_joints)
-        world = [0.0] * len(AXIS_LETTERS)
+        world = [0.0] * len(AXIS_NAMES)
         world[0] = 0.5 * (j[0] + j[1])
         world[1] = 0.5 * (j[0] - j[1])
         world[2:9] = j[2:9]
-        return EmcPose(*world)
+        return Pose(*world)
 
-    def inverse(self, pose: EmcPose) -> list[float]:
+    def inverse(self, pose: Pose) -> list[float]:
         check_pose(pose)
         w = pose.as_tuple()
         return [w[0] + w[1], w[0] - w[1], *w[2:9]]
@@ -42,7 +42,7 @@ class CoreXY:
     def kinematics_type(self) -> KinematicsType:
         return KinematicsType.BOTH
 
-    def home(self, pose: EmcPose, joints: Sequence[float]) -> tuple[EmcPose, list[float]]:
+    def home(self, pose: Pose, joints: Sequence[float]) -> tuple[Pose, list[float]]:
         values = check_joints(joints, self.num_joints)[: self.num_joints]
         return self.forward(values), values
 

@@ -28,7 +28,7 @@ from motion.kinematics import (
 )
 from motion.kinematics._parallel import solve_forward
 from motion.kinematics._rotation import rpy_matrix
-from motion.pose import EmcPose
+from nml.pose import Pose
 
 STRUTS = 6
 BASE = (
@@ -152,11 +152,11 @@ class Hexapod:
             lengths.append(length)
         return lengths
 
-    def inverse(self, pose: EmcPose) -> list[float]:
+    def inverse(self, pose: Pose) -> list[float]:
         coord = [pose.x, pose.y, pose.z, *(v * math.pi / 180.0 for v in (pose.a, pose.b, pose.c))]
         return self._struts(coord, is_shown=True)
 
-    def forward(self, joints: Sequence[float]) -> EmcPose:
+    def forward(self, joints: Sequence[float]) -> Pose:
         p = self.pins
         if any(j <= 0.0 for j in joints[:STRUTS]):
             p.fwd_kins_fail = True
@@ -180,7 +180,7 @@ class Hexapod:
         if iterations > p.max_iterations:
             p.max_iterations = iterations
         p.fwd_kins_fail = False
-        pose = EmcPose(*coord[:3], *(v * 180.0 / math.pi for v in coord[3:]))
+        pose = Pose(*coord[:3], *(v * 180.0 / math.pi for v in coord[3:]))
         for pins in (p, self.gui):  # the vismach GUI reads the pose from these
             pins.x, pins.y, pins.z, pins.a, pins.b, pins.c = pose.as_tuple()[:6]
         return pose

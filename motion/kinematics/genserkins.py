@@ -35,7 +35,7 @@ from motion.kinematics import (
     switchable,
 )
 from motion.kinematics._rotation import rpy_matrix
-from motion.pose import EmcPose
+from nml.pose import Pose
 
 LINKS = 6
 REQUIRED = "xyzabcuvw"
@@ -121,7 +121,7 @@ class Genser:
             frames.append(pose)
         return frames
 
-    def forward(self, joints: Sequence[float]) -> EmcPose:
+    def forward(self, joints: Sequence[float]) -> Pose:
         unrotate = self.pins.unrotate
         angles: list[float] = []
         for i in range(LINKS):
@@ -134,9 +134,9 @@ class Genser:
         roll, pitch, yaw = rpy_of(tool[:3, :3])
         extra = [*joints[LINKS:9], 0.0, 0.0, 0.0][:3]
         x, y, z = (float(v) for v in tool[:3, 3])
-        return EmcPose(x, y, z, roll * TO_DEG, pitch * TO_DEG, yaw * TO_DEG, *map(float, extra))
+        return Pose(x, y, z, roll * TO_DEG, pitch * TO_DEG, yaw * TO_DEG, *map(float, extra))
 
-    def inverse(self, pose: EmcPose) -> list[float]:
+    def inverse(self, pose: Pose) -> list[float]:
         check_pose(pose)
         p = self.pins
         target_rot = np.array(rpy_matrix(pose.a * TO_RAD, pose.b * TO_RAD, pose.c * TO_RAD)).T

@@ -22,7 +22,7 @@ from motion.kinematics import (
     make_pins,
     realtime_module,
 )
-from motion.pose import EmcPose
+from nml.pose import Pose
 
 DELTA_DIAGONAL_ROD = 269.0
 DELTA_RADIUS = 198.25 - 33.0 - 35.0  # smooth rod offset - effector and carriage offsets
@@ -54,7 +54,7 @@ class LinearDelta:
         )
         return radius, rod, towers
 
-    def inverse(self, pose: EmcPose) -> list[float]:
+    def inverse(self, pose: Pose) -> list[float]:
         check_pose(pose)
         _, rod, (ax, ay, bx, by, cx, cy) = self._towers()
         x, y, z = pose.x, pose.y, pose.z
@@ -67,7 +67,7 @@ class LinearDelta:
             heights.append(z + math.sqrt(under))
         return [*heights, pose.a, pose.b, pose.c, pose.u, pose.v, pose.w]
 
-    def forward(self, joints: Sequence[float]) -> EmcPose:
+    def forward(self, joints: Sequence[float]) -> Pose:
         q1, q2, q3, *rest = check_joints(joints, 3)
         rest = (rest + [0.0] * 6)[:6]
         _, rod, (_ax, ay, bx, by, cx, cy) = self._towers()
@@ -86,12 +86,12 @@ class LinearDelta:
         if discriminant < 0:
             raise SingularityError("lineardeltakins: the rods cannot meet")
         z = -0.5 * (b + math.sqrt(discriminant)) / a
-        return EmcPose((a1 * z + b1) / den, (a2 * z + b2) / den, z, *rest)
+        return Pose((a1 * z + b1) / den, (a2 * z + b2) / den, z, *rest)
 
     def kinematics_type(self) -> KinematicsType:
         return KinematicsType.BOTH
 
-    def home(self, pose: EmcPose, joints: Sequence[float]) -> tuple[EmcPose, list[float]]:
+    def home(self, pose: Pose, joints: Sequence[float]) -> tuple[Pose, list[float]]:
         values = check_joints(joints, self.num_joints)[: self.num_joints]
         return self.forward(values), values
 

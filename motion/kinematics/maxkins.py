@@ -22,7 +22,7 @@ from motion.kinematics import (
     make_pins,
     realtime_module,
 )
-from motion.pose import EmcPose
+from nml.pose import Pose
 
 
 def _rad(degrees: float) -> float:
@@ -37,7 +37,7 @@ class MaxKins(NineJointKins):
     def __init__(self, pins: Any) -> None:
         self.pins = pins
 
-    def forward(self, joints: Sequence[float]) -> EmcPose:
+    def forward(self, joints: Sequence[float]) -> Pose:
         j = self.joints_of(joints)
         arm = self.pins.pivot_length + j[8]
         b = _rad(j[4])
@@ -45,14 +45,14 @@ class MaxKins(NineJointKins):
         radius = math.hypot(j[0], j[1])
         theta = math.atan2(j[1], j[0]) + _rad(j[5])
         zv, xv = j[6] * math.sin(b), j[6] * math.cos(b)
-        return EmcPose(
+        return Pose(
             radius * math.cos(theta) + xb - xv,
             radius * math.sin(theta) - j[7],
             j[2] - zb + zv + self.pins.pivot_length,
             *j[3:9],
         )
 
-    def inverse(self, pose: EmcPose) -> list[float]:
+    def inverse(self, pose: Pose) -> list[float]:
         check_pose(pose)
         arm = self.pins.pivot_length + pose.w
         b = _rad(pose.b)

@@ -14,7 +14,7 @@ from typing import Any
 from hal.api import RtComponent, funct, param, pin
 from hal.core import HalError
 from motion.kinematics import HalContext, JointMap, SwitchKins, make_pins
-from motion.pose import EmcPose
+from nml.pose import Pose
 
 
 class MillTurnPins(RtComponent):
@@ -36,19 +36,19 @@ class Mill:
     def __init__(self, pins: Any) -> None:
         self.pins = pins
 
-    def forward(self, joints: Sequence[float]) -> EmcPose:
-        return EmcPose(joints[0], joints[1], joints[2], joints[3])
+    def forward(self, joints: Sequence[float]) -> Pose:
+        return Pose(joints[0], joints[1], joints[2], joints[3])
 
-    def inverse(self, pose: EmcPose) -> list[float]:
+    def inverse(self, pose: Pose) -> list[float]:
         self.pins.out = self.pins.in_  # (the template's example of a pin update)
         return [pose.x, pose.y, pose.z, pose.a]
 
 
 class Turn(Mill):
-    def forward(self, joints: Sequence[float]) -> EmcPose:
-        return EmcPose(joints[2], -joints[1], joints[0], joints[3])
+    def forward(self, joints: Sequence[float]) -> Pose:
+        return Pose(joints[2], -joints[1], joints[0], joints[3])
 
-    def inverse(self, pose: EmcPose) -> list[float]:
+    def inverse(self, pose: Pose) -> list[float]:
         self.pins.out = self.pins.in_
         return [pose.z, -pose.y, pose.x, pose.a]
 

@@ -24,7 +24,7 @@ from motion.kinematics import (
 )
 from motion.kinematics._parallel import solve_forward
 from motion.kinematics._rotation import rpy_matrix
-from motion.pose import EmcPose
+from nml.pose import Pose
 
 STRUTS = 5
 BASE = (
@@ -84,11 +84,11 @@ class PentaKins:
             )
         return lengths
 
-    def inverse(self, pose: EmcPose) -> list[float]:
+    def inverse(self, pose: Pose) -> list[float]:
         check_pose(pose)
         return self._struts([pose.x, pose.y, pose.z, math.radians(pose.a), math.radians(pose.b)])
 
-    def forward(self, joints: Sequence[float]) -> EmcPose:
+    def forward(self, joints: Sequence[float]) -> Pose:
         values = check_joints(joints, STRUTS)
         if any(v <= 0.0 for v in values[:STRUTS]):
             raise KinematicsError("pentakins: strut lengths must be positive")
@@ -106,14 +106,14 @@ class PentaKins:
         p.last_iterations = iterations
         if iterations > p.max_iterations:
             p.max_iterations = iterations
-        return EmcPose(
+        return Pose(
             coord[0], coord[1], coord[2], coord[3] * 180.0 / math.pi, coord[4] * 180.0 / math.pi
         )
 
     def kinematics_type(self) -> KinematicsType:
         return KinematicsType.BOTH
 
-    def home(self, pose: EmcPose, joints: Sequence[float]) -> tuple[EmcPose, list[float]]:
+    def home(self, pose: Pose, joints: Sequence[float]) -> tuple[Pose, list[float]]:
         values = check_joints(joints, STRUTS)[:STRUTS]
         return self.forward(values), values
 

@@ -22,7 +22,7 @@ from motion.kinematics import (
     switchable,
 )
 from motion.kinematics._rotation import matrix_rpy, rpy_matrix
-from motion.pose import EmcPose
+from nml.pose import Pose
 
 SINGULAR_FUZZ = FLAG_FUZZ = 0.000001
 SHOULDER_RIGHT, ELBOW_DOWN, WRIST_FLIP, SINGULAR = 0x01, 0x02, 0x04, 0x08
@@ -43,7 +43,7 @@ class Puma:
         self.flags = 0  # LinuxCNC's iflags: the configuration forward saw, for inverse
         self.last_joints = [0.0] * 6
 
-    def forward(self, joints: Sequence[float]) -> EmcPose:
+    def forward(self, joints: Sequence[float]) -> Pose:
         p = self.pins
         a2, a3, d3, d4, d6 = p.A2, p.A3, p.D3, p.D4, p.D6
         angles = [j * math.pi / 180 for j in joints[:6]]
@@ -83,12 +83,12 @@ class Puma:
         self.flags = flags
         self.last_joints = [float(j) for j in joints[:6]]
         roll, pitch, yaw = matrix_rpy((col_x, col_y, col_z))
-        return EmcPose(
+        return Pose(
             x + col_z[0] * d6, y + col_z[1] * d6, z + col_z[2] * d6,
             roll * DEG, pitch * DEG, yaw * DEG,
         )  # fmt: skip
 
-    def inverse(self, pose: EmcPose) -> list[float]:
+    def inverse(self, pose: Pose) -> list[float]:
         p = self.pins
         a2, a3, d3, d4, d6 = p.A2, p.A3, p.D3, p.D4, p.D6
         rot_x, _rot_y, rot_z = rpy_matrix(

@@ -20,7 +20,7 @@ from motion.kinematics import (
     make_pins,
     realtime_module,
 )
-from motion.pose import EmcPose
+from nml.pose import Pose
 
 
 class RosePins(RtComponent):
@@ -35,12 +35,12 @@ class RoseKins(NineJointKins):
         self.old_quadrant = 0
         self.turns = 0
 
-    def forward(self, joints: Sequence[float]) -> EmcPose:
+    def forward(self, joints: Sequence[float]) -> Pose:
         j = self.joints_of(joints)
         theta = TO_RAD * j[2]
-        return EmcPose(j[0] * math.cos(theta), j[0] * math.sin(theta), j[1])
+        return Pose(j[0] * math.cos(theta), j[0] * math.sin(theta), j[1])
 
-    def inverse(self, pose: EmcPose) -> list[float]:
+    def inverse(self, pose: Pose) -> list[float]:
         check_pose(pose)
         x, y = pose.x, pose.y
         quadrant = (1 if y >= 0 else 4) if x >= 0 else (2 if y >= 0 else 3)

@@ -23,7 +23,7 @@ from motion.kinematics import (
     make_pins,
     realtime_module,
 )
-from motion.pose import EmcPose
+from nml.pose import Pose
 
 
 class RotaryDeltaPins(RtComponent):
@@ -45,7 +45,7 @@ class RotaryDelta:
     def __init__(self, pins: Any) -> None:
         self.pins = pins
 
-    def forward(self, joints: Sequence[float]) -> EmcPose:
+    def forward(self, joints: Sequence[float]) -> Pose:
         values = check_joints(joints, 3)
         rest = (values[3:] + [0.0] * 6)[:6]
         p = self.pins
@@ -78,7 +78,7 @@ class RotaryDelta:
         if d < 0:
             raise SingularityError("rotarydeltakins: the shins cannot meet")
         z = (-b - math.sqrt(d)) / (2 * a)
-        return EmcPose((a1 * z + b1) / denom, (a2 * z + b2) / denom, z, *rest)
+        return Pose((a1 * z + b1) / denom, (a2 * z + b2) / denom, z, *rest)
 
     def _hip_angle(self, x: float, y: float, z: float) -> float:
         p = self.pins
@@ -94,7 +94,7 @@ class RotaryDelta:
         knee_z = b * knee_y - a
         return math.atan2(knee_z, knee_y - platform) * 180.0 / math.pi
 
-    def inverse(self, pose: EmcPose) -> list[float]:
+    def inverse(self, pose: Pose) -> list[float]:
         check_pose(pose)
         x, y, z = pose.x, pose.y, pose.z
         angles = [self._hip_angle(x, y, z)]
@@ -106,7 +106,7 @@ class RotaryDelta:
     def kinematics_type(self) -> KinematicsType:
         return KinematicsType.BOTH
 
-    def home(self, pose: EmcPose, joints: Sequence[float]) -> tuple[EmcPose, list[float]]:
+    def home(self, pose: Pose, joints: Sequence[float]) -> tuple[Pose, list[float]]:
         values = check_joints(joints, self.num_joints)[: self.num_joints]
         return self.forward(values), values
 

@@ -8,20 +8,20 @@ from collections.abc import Sequence
 from typing import Any
 
 from motion.kinematics import HalContext, NineJointKins, check_pose, realtime_module
-from motion.pose import EmcPose
+from nml.pose import Pose
 
 
 class RotateKins(NineJointKins):
-    def forward(self, joints: Sequence[float]) -> EmcPose:
+    def forward(self, joints: Sequence[float]) -> Pose:
         j = self.joints_of(joints)
         c = -j[5] * math.pi / 180
-        return EmcPose(
+        return Pose(
             j[0] * math.cos(c) - j[1] * math.sin(c),
             j[0] * math.sin(c) + j[1] * math.cos(c),
             *j[2:9],
         )
 
-    def inverse(self, pose: EmcPose) -> list[float]:
+    def inverse(self, pose: Pose) -> list[float]:
         check_pose(pose)
         c = pose.c * math.pi / 180
         return [

@@ -22,7 +22,7 @@ from motion.kinematics import (
     realtime_module,
     switchable,
 )
-from motion.pose import EmcPose
+from nml.pose import Pose
 
 
 class ScaraPins(RtComponent):
@@ -39,13 +39,13 @@ class Scara:
         self.pins = pins
         self.is_elbow_flipped = False  # LinuxCNC's iflags, set by forward for inverse
 
-    def forward(self, joints: Sequence[float]) -> EmcPose:
+    def forward(self, joints: Sequence[float]) -> Pose:
         p = self.pins
         a0 = joints[0] * (math.pi / 180)
         a1 = joints[1] * (math.pi / 180) + a0
         a3 = joints[3] * (math.pi / 180) + a1
         self.is_elbow_flipped = joints[1] < 90
-        return EmcPose(
+        return Pose(
             x=p.D2 * math.cos(a0) + p.D4 * math.cos(a1) + p.D6 * math.cos(a3),
             y=p.D2 * math.sin(a0) + p.D4 * math.sin(a1) + p.D6 * math.sin(a3),
             z=p.D1 + p.D3 - joints[2] - p.D5,
@@ -54,7 +54,7 @@ class Scara:
             c=a3 * 180 / math.pi,
         )
 
-    def inverse(self, pose: EmcPose) -> list[float]:
+    def inverse(self, pose: Pose) -> list[float]:
         p = self.pins
         a3 = pose.c * (math.pi / 180)
         xt = pose.x - p.D6 * math.cos(a3)  # the quill's centre

@@ -22,7 +22,7 @@ from motion.kinematics import (
     check_pose,
     realtime_module,
 )
-from motion.pose import EmcPose
+from nml.pose import Pose
 
 SHOULDER_OUT, SHOULDER_UP = 16.0, 140.0  # link 0: origin to the shoulder
 UPPER_ARM = FOREARM = 221.0  # links 1 and 2
@@ -33,7 +33,7 @@ class Scorbot:
     joint_axes = [0, 1, 2, 3, 4]
     axis_mask = 0b11111  # X Y Z A B
 
-    def forward(self, joints: Sequence[float]) -> EmcPose:
+    def forward(self, joints: Sequence[float]) -> Pose:
         j = check_joints(joints, self.num_joints)
         reach = (
             SHOULDER_OUT + UPPER_ARM * math.cos(TO_RAD * j[1]) + FOREARM * math.cos(TO_RAD * j[2])
@@ -42,9 +42,9 @@ class Scorbot:
             SHOULDER_UP + UPPER_ARM * math.sin(TO_RAD * j[1]) + FOREARM * math.sin(TO_RAD * j[2])
         )
         turn = TO_RAD * j[0]
-        return EmcPose(reach * math.cos(turn), reach * math.sin(turn), height, j[3], j[4])
+        return Pose(reach * math.cos(turn), reach * math.sin(turn), height, j[3], j[4])
 
-    def inverse(self, pose: EmcPose) -> list[float]:
+    def inverse(self, pose: Pose) -> list[float]:
         check_pose(pose)
         # the wrist relative to the shoulder, in the arm's plane
         r = math.hypot(pose.x, pose.y) - SHOULDER_OUT
@@ -69,7 +69,7 @@ class Scorbot:
     def kinematics_type(self) -> KinematicsType:
         return KinematicsType.BOTH
 
-    def home(self, pose: EmcPose, joints: Sequence[float]) -> tuple[EmcPose, list[float]]:
+    def home(self, pose: Pose, joints: Sequence[float]) -> tuple[Pose, list[float]]:
         values = check_joints(joints, self.num_joints)[: self.num_joints]
         return self.forward(values), values
 

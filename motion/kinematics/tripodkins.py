@@ -20,7 +20,7 @@ from motion.kinematics import (
     make_pins,
     realtime_module,
 )
-from motion.pose import EmcPose
+from nml.pose import Pose
 
 
 class TripodPins(RtComponent):
@@ -38,7 +38,7 @@ class TripodKins:
         self.pins = pins
         self.is_below = False  # which side the last inverse kinematics was on
 
-    def forward(self, joints: Sequence[float]) -> EmcPose:
+    def forward(self, joints: Sequence[float]) -> Pose:
         ad, bd, cd = check_joints(joints, 3)[:3]
         bx, cx, cy = self.pins.Bx, self.pins.Cx, self.pins.Cy
         p = ad * ad
@@ -53,9 +53,9 @@ class TripodKins:
         if z2 < 0.0:
             raise SingularityError("tripodkins: the struts cannot meet")
         z = math.sqrt(z2)
-        return EmcPose(x, y, -z if self.is_below else z)
+        return Pose(x, y, -z if self.is_below else z)
 
-    def inverse(self, pose: EmcPose) -> list[float]:
+    def inverse(self, pose: Pose) -> list[float]:
         check_pose(pose)
         bx, cx, cy = self.pins.Bx, self.pins.Cx, self.pins.Cy
         x, y, z = pose.x, pose.y, pose.z
@@ -69,7 +69,7 @@ class TripodKins:
     def kinematics_type(self) -> KinematicsType:
         return KinematicsType.BOTH
 
-    def home(self, pose: EmcPose, joints: Sequence[float]) -> tuple[EmcPose, list[float]]:
+    def home(self, pose: Pose, joints: Sequence[float]) -> tuple[Pose, list[float]]:
         values = check_joints(joints, 3)[:3]
         return self.forward(values), values
 

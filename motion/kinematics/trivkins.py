@@ -21,7 +21,7 @@ from motion.kinematics import (
     check_pose,
     realtime_module,
 )
-from motion.pose import AXIS_LETTERS, EmcPose
+from nml.pose import AXIS_NAMES, Pose
 
 _KINSTYPES = {
     "b": KinematicsType.BOTH,
@@ -31,7 +31,7 @@ _KINSTYPES = {
 
 
 class TrivKins:
-    def __init__(self, coordinates: str = AXIS_LETTERS, kinstype: str = "1") -> None:
+    def __init__(self, coordinates: str = AXIS_NAMES, kinstype: str = "1") -> None:
         word = kinstype.strip().lower()
         if word and word not in ("1", "identity") and word[0] not in _KINSTYPES:
             raise KinematicsError(
@@ -44,23 +44,23 @@ class TrivKins:
         self.joint_axes = self.map.axis_of_joint
         self.axis_mask = self.map.axis_mask
 
-    def forward(self, joints: Sequence[float]) -> EmcPose:
+    def forward(self, joints: Sequence[float]) -> Pose:
         return self.map.to_pose(check_joints(joints, self.num_joints))
 
-    def inverse(self, pose: EmcPose) -> list[float]:
+    def inverse(self, pose: Pose) -> list[float]:
         check_pose(pose)
         return self.map.to_joints(pose)
 
     def kinematics_type(self) -> KinematicsType:
         return self._type
 
-    def home(self, pose: EmcPose, joints: Sequence[float]) -> tuple[EmcPose, list[float]]:
+    def home(self, pose: Pose, joints: Sequence[float]) -> tuple[Pose, list[float]]:
         values = check_joints(joints, self.num_joints)[: self.num_joints]
         return self.forward(values), values
 
 
 def create(
-    coordinates: str = AXIS_LETTERS, kinstype: str = "1", hal: HalContext | None = None
+    coordinates: str = AXIS_NAMES, kinstype: str = "1", hal: HalContext | None = None
 ) -> TrivKins:
     return TrivKins(coordinates, kinstype)
 

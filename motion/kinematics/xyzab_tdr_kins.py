@@ -20,7 +20,7 @@ from motion.kinematics import (
     SwitchKins,
     make_pins,
 )
-from motion.pose import EmcPose
+from nml.pose import Pose
 
 
 class TdrPins(RtComponent):
@@ -39,10 +39,10 @@ class TdrInstance(RtComponent):
 class Identity5:
     """Type 0: X Y Z A B straight through (C U V W are 0)."""
 
-    def forward(self, joints: Sequence[float]) -> EmcPose:
-        return EmcPose(*joints[:5])
+    def forward(self, joints: Sequence[float]) -> Pose:
+        return Pose(*joints[:5])
 
-    def inverse(self, pose: EmcPose) -> list[float]:
+    def inverse(self, pose: Pose) -> list[float]:
         return [pose.x, pose.y, pose.z, pose.a, pose.b]
 
 
@@ -52,14 +52,14 @@ class Tdr:
     def __init__(self, pins: Any) -> None:
         self.pins = pins
 
-    def forward(self, j: Sequence[float]) -> EmcPose:
+    def forward(self, j: Sequence[float]) -> Pose:
         p = self.pins
         rx, ry, rz = p.x_rot_point, p.y_rot_point, p.z_rot_point
         dz, dt = p.z_offset, p.tool_offset_z
         sa, ca = math.sin(j[3] * TO_RAD), math.cos(j[3] * TO_RAD)
         sb, cb = math.sin(j[4] * TO_RAD), math.cos(j[4] * TO_RAD)
         px, py, pz = j[0] - rx, j[1] - ry, j[2] - rz - dt
-        return EmcPose(
+        return Pose(
             x=cb * px + sb * pz + rx,
             y=sa * sb * px + ca * py - cb * sa * pz + sa * dz + ry,
             z=-ca * sb * px + sa * py + ca * cb * pz - ca * dz + rz + dz + dt,
@@ -67,7 +67,7 @@ class Tdr:
             b=j[4],
         )
 
-    def inverse(self, pose: EmcPose) -> list[float]:
+    def inverse(self, pose: Pose) -> list[float]:
         p = self.pins
         rx, ry, rz = p.x_rot_point, p.y_rot_point, p.z_rot_point
         dx, dz, dt = p.x_offset, p.z_offset, p.tool_offset_z

@@ -23,7 +23,7 @@ from operator import mul
 
 import numpy as np
 
-from motion.pose import NUM_AXES
+from nml.axes import NUM_AXES
 
 XYZ = slice(0, 3)
 ABC = slice(3, 6)

@@ -43,7 +43,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from motion.free import braking_speed, check_finite, check_positive
-from motion.pose import NUM_AXES, EmcPose
 from motion.tp.geometry import (
     EPS,
     XYZ,
@@ -57,6 +56,8 @@ from motion.tp.geometry import (
     norm,
 )
 from motion.tp.spindlesync import RigidTap, follow_speed
+from nml.axes import NUM_AXES
+from nml.pose import Pose
 
 # Part of the acceleration budget a curved piece may use for centripetal acceleration.
 NORMAL_FRACTION = 0.5
@@ -252,7 +253,7 @@ class TrajectoryPlanner:
         self.is_waiting_for_index = False
         self.spindle_reversal = 1.0
 
-    def set_position(self, pose: EmcPose | Sequence[float]) -> None:
+    def set_position(self, pose: Pose | Sequence[float]) -> None:
         """Start from ``pose`` with an empty queue (entering coord mode, MOT-029)."""
         pos = np.array(list(pose), dtype=float)
         if pos.shape != (NUM_AXES,) or not np.isfinite(pos).all():
@@ -288,8 +289,8 @@ class TrajectoryPlanner:
         return self._end.tolist()
 
     @property
-    def pose(self) -> EmcPose:
-        return EmcPose(*self.pos.tolist())
+    def pose(self) -> Pose:
+        return Pose(*self.pos.tolist())
 
     @property
     def dtg(self) -> np.ndarray:

@@ -15,7 +15,7 @@ from motion.kinematics import (
     load_kinematics,
 )
 from motion.modules import ModuleInterfaceError
-from motion.pose import EmcPose
+from nml.pose import Pose
 
 coord = st.floats(-1000, 1000, allow_nan=False)
 
@@ -23,7 +23,7 @@ coord = st.floats(-1000, 1000, allow_nan=False)
 def test_trivkins_default_maps_nine_axes_in_order() -> None:
     kins = load_kinematics("trivkins")
     assert kins.num_joints == 9
-    assert kins.forward(range(9)) == EmcPose(*map(float, range(9)))
+    assert kins.forward(range(9)) == Pose(*map(float, range(9)))
     assert kins.kinematics_type() == KinematicsType.IDENTITY
 
 
@@ -31,15 +31,15 @@ def test_trivkins_lathe_coordinates() -> None:
     kins = load_kinematics("trivkins", coordinates="XZ")
     assert kins.num_joints == 2
     assert kins.axis_mask == 0x5  # MOT-068
-    assert kins.inverse(EmcPose(x=1, y=7, z=3)) == [1, 3]
-    assert kins.forward([1, 3]) == EmcPose(x=1, z=3)
+    assert kins.inverse(Pose(x=1, y=7, z=3)) == [1, 3]
+    assert kins.forward([1, 3]) == Pose(x=1, z=3)
 
 
 def test_trivkins_gantry_repeats_a_letter() -> None:
     kins = load_kinematics("trivkins", coordinates="xyyz", kinstype="both")
-    assert kins.inverse(EmcPose(x=1, y=2, z=3)) == [1, 2, 2, 3]
+    assert kins.inverse(Pose(x=1, y=2, z=3)) == [1, 2, 2, 3]
     # forward takes the axis from the first joint mapped to it (KIN-007)
-    assert kins.forward([1, 2, 2.5, 3]) == EmcPose(x=1, y=2, z=3)
+    assert kins.forward([1, 2, 2.5, 3]) == Pose(x=1, y=2, z=3)
     assert kins.kinematics_type() == KinematicsType.BOTH
     assert kins.axis_mask == 0x7
 
@@ -51,15 +51,15 @@ def test_trivkins_axis_mask_xyzb() -> None:
 @given(st.lists(coord, min_size=9, max_size=9), st.sampled_from(["xyz", "xyyz", "xz", "xyzabcuvw"]))
 def test_trivkins_forward_inverse_round_trip(values: list[float], coordinates: str) -> None:
     kins = load_kinematics("trivkins", coordinates=coordinates)
-    pose = kins.forward(kins.inverse(EmcPose(*values)))
+    pose = kins.forward(kins.inverse(Pose(*values)))
     for letter in set(coordinates):
-        assert pose[letter] == EmcPose(*values)[letter]
+        assert pose[letter] == Pose(*values)[letter]
 
 
 @given(coord, coord, coord)
 def test_corexy_round_trip(x: float, y: float, z: float) -> None:
     kins = load_kinematics("corexykins")
-    joints = kins.inverse(EmcPose(x=x, y=y, z=z))
+    joints = kins.inverse(Pose(x=x, y=y, z=z))
     assert joints[0] == pytest.approx(x + y) and joints[1] == pytest.approx(x - y)
     back = kins.forward(joints)
     assert (back.x, back.y, back.z) == pytest.approx((x, y, z), abs=1e-9)
@@ -67,7 +67,7 @@ def test_corexy_round_trip(x: float, y: float, z: float) -> None:
 
 def test_bipod_test_vectors() -> None:  # KIN-013
     kins = load_kinematics("bipod", bx="10")
-    joints = kins.inverse(EmcPose(x=5, y=5))
+    joints = kins.inverse(Pose(x=5, y=5))
     assert joints == pytest.approx([math.sqrt(50), math.sqrt(50)])
     pose = kins.forward(joints)
     assert (pose.x, pose.y) == pytest.approx((5, 5))
@@ -82,14 +82,14 @@ def test_bipod_singularity_is_an_error() -> None:  # KIN-010/012
 @given(st.floats(0.1, 9.9), st.floats(0.1, 50))
 def test_bipod_round_trip(x: float, y: float) -> None:
     kins = load_kinematics("bipod", bx=10)
-    pose = kins.forward(kins.inverse(EmcPose(x=x, y=y)))
+    pose = kins.forward(kins.inverse(Pose(x=x, y=y)))
     assert (pose.x, pose.y) == pytest.approx((x, y), abs=1e-6)
 
 
 def test_home_returns_the_pose_of_the_home_joints() -> None:  # KIN-015
     kins = load_kinematics("trivkins", coordinates="xyz")
-    pose, joints = kins.home(EmcPose(), [1, 2, 3])
-    assert joints == [1, 2, 3] and pose == EmcPose(1, 2, 3)
+    pose, joints = kins.home(Pose(), [1, 2, 3])
+    assert joints == [1, 2, 3] and pose == Pose(1, 2, 3)
 
 
 def test_bad_input_gives_clear_errors() -> None:
@@ -115,7 +115,7 @@ def test_loader_refuses_unknown_and_incomplete_modules() -> None:
         num_joints = 1
 
         def forward(self, joints):
-            return EmcPose()
+            return Pose()
 
     module.create = Half
     sys.modules["halfkins"] = module

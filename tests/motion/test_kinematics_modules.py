@@ -18,7 +18,7 @@ from hypothesis import strategies as st
 
 from motion.kinematics import KinematicsError, SwitchKins, fit_joints, load_kinematics
 from motion.kinematics._rotation import rpy_matrix
-from motion.pose import AXIS_LETTERS, EmcPose
+from nml.pose import AXIS_NAMES, Pose
 
 REPO = Path(__file__).resolve().parents[2]
 SAMPLE_CONFIG_KINEMATICS = [
@@ -63,7 +63,7 @@ def rz(deg: float) -> np.ndarray:
     return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
 
 
-def assert_pose(pose: EmcPose, expected: EmcPose, letters: str, tol: float = 1e-6) -> None:
+def assert_pose(pose: Pose, expected: Pose, letters: str, tol: float = 1e-6) -> None:
     for letter in letters:
         assert pose[letter] == pytest.approx(expected[letter], abs=tol), letter
 
@@ -90,38 +90,38 @@ def test_hal_components_do_not_import_motion() -> None:
 # name -> (module parameters, pins to set on its own kinematics, poses to round-trip,
 #          the axes that must come back)
 ROUND_TRIPS = {
-    "corexykins": ({}, {}, [EmcPose(10, -3, 2, 1, 2, 3, 4, 5, 6)], AXIS_LETTERS),
+    "corexykins": ({}, {}, [Pose(10, -3, 2, 1, 2, 3, 4, 5, 6)], AXIS_NAMES),
     "xyzac-trt-kins": (
         {},
         {"x_rot_point": 3, "y_rot_point": -2, "z_rot_point": 5, "y_offset": 20, "z_offset": 10},
-        [EmcPose(10, 5, -20, a=-30, c=90), EmcPose(-50, 40, 7, a=20, c=-200)],
+        [Pose(10, 5, -20, a=-30, c=90), Pose(-50, 40, 7, a=20, c=-200)],
         "xyzac",
     ),
     "xyzbc-trt-kins": (
         {},
         {"x_rot_point": 3, "y_rot_point": -2, "z_rot_point": 5, "x_offset": 20, "tool_offset": 35},
-        [EmcPose(10, 5, -20, b=-30, c=90), EmcPose(-50, 40, 7, b=45, c=300)],
+        [Pose(10, 5, -20, b=-30, c=90), Pose(-50, 40, 7, b=45, c=300)],
         "xyzbc",
     ),
-    "lineardeltakins": ({}, {}, [EmcPose(10, -20, 30), EmcPose(-60, 40, -100)], "xyz"),
-    "rotarydeltakins": ({}, {}, [EmcPose(1, -2, -15), EmcPose(-3, 2.5, -18)], "xyz"),
-    "5axiskins": ({}, {}, [EmcPose(10, 20, 30, b=30, c=60, w=5)], "xyzbcw"),
+    "lineardeltakins": ({}, {}, [Pose(10, -20, 30), Pose(-60, 40, -100)], "xyz"),
+    "rotarydeltakins": ({}, {}, [Pose(1, -2, -15), Pose(-3, 2.5, -18)], "xyz"),
+    "5axiskins": ({}, {}, [Pose(10, 20, 30, b=30, c=60, w=5)], "xyzbcw"),
     # (LinuxCNC's maxkins does not invert with U or V and a turned C)
     "maxkins": (
         {},
         {},
-        [EmcPose(1, 2, 3, b=30, w=0.5, v=0.1), EmcPose(1, 2, 3, c=40, w=0.5)],
+        [Pose(1, 2, 3, b=30, w=0.5, v=0.1), Pose(1, 2, 3, c=40, w=0.5)],
         "xyzbcw",
     ),
-    "pentakins": ({}, {}, [EmcPose(10, -20, 5, a=3, b=-4)], "xyzab"),
-    "genhexkins": ({}, {}, [EmcPose(1, -2, 20, a=3, b=-4, c=5)], "xyzabc"),
-    "pumakins": ({}, {}, [EmcPose(300, 200, 100, 10, 20, 30)], "xyzabc"),
-    "scarakins": ({}, {}, [EmcPose(400, 200, 300, 1, 2, 30)], "xyzabc"),
-    "rosekins": ({}, {}, [EmcPose(10, 20, 3), EmcPose(-10, -1, 4)], "xyz"),
-    "rotatekins": ({}, {}, [EmcPose(10, 20, 3, 1, 2, 33, 4, 5, 6)], AXIS_LETTERS),
-    "tripodkins": ({}, {}, [EmcPose(0.3, 0.4, 2), EmcPose(0.3, 0.4, -2)], "xyz"),
-    "scorbot-kins": ({}, {}, [EmcPose(300, 100, 200, 10, 20)], "xyzab"),
-    "trivkins": ({"coordinates": "xyyz"}, {}, [EmcPose(1, 2, 3)], "xyz"),
+    "pentakins": ({}, {}, [Pose(10, -20, 5, a=3, b=-4)], "xyzab"),
+    "genhexkins": ({}, {}, [Pose(1, -2, 20, a=3, b=-4, c=5)], "xyzabc"),
+    "pumakins": ({}, {}, [Pose(300, 200, 100, 10, 20, 30)], "xyzabc"),
+    "scarakins": ({}, {}, [Pose(400, 200, 300, 1, 2, 30)], "xyzabc"),
+    "rosekins": ({}, {}, [Pose(10, 20, 3), Pose(-10, -1, 4)], "xyz"),
+    "rotatekins": ({}, {}, [Pose(10, 20, 3, 1, 2, 33, 4, 5, 6)], AXIS_NAMES),
+    "tripodkins": ({}, {}, [Pose(0.3, 0.4, 2), Pose(0.3, 0.4, -2)], "xyz"),
+    "scorbot-kins": ({}, {}, [Pose(300, 100, 200, 10, 20)], "xyzab"),
+    "trivkins": ({"coordinates": "xyyz"}, {}, [Pose(1, 2, 3)], "xyz"),
 }
 
 
@@ -137,7 +137,7 @@ def test_forward_of_inverse_is_the_pose(name: str) -> None:
         assert_pose(kins.forward(joints), pose, letters, tol=1e-6)
 
 
-def orientation(pose: EmcPose) -> np.ndarray:
+def orientation(pose: Pose) -> np.ndarray:
     """The rotation matrix of a pose's roll, pitch and yaw (A B C): angles that differ by
     a turn, or at gimbal lock, are the same orientation."""
     return np.array(rpy_matrix(*(math.radians(v) for v in (pose.a, pose.b, pose.c))))
@@ -177,7 +177,7 @@ def test_xyzac_trt_is_a_tilting_table_carrying_a_rotary_table(point, a: float, c
     r, d = np.array([3.0, -2.0, 5.0]), np.array([0.0, 20.0, 45.0])
     p = np.array(point)
     expected = rx(a) @ (rz(c) @ (p - r) - d) + d + r
-    joints = kins.inverse(EmcPose(*point, a=a, c=c))
+    joints = kins.inverse(Pose(*point, a=a, c=c))
     assert joints == pytest.approx([*expected, a, c], abs=1e-9)
 
 
@@ -194,21 +194,21 @@ def test_xyzbc_trt_is_a_tilting_table_carrying_a_rotary_table(point, b: float, c
     pins.x_offset, pins.z_offset, pins.tool_offset = 20.0, 10.0, 35.0
     r, d = np.array([3.0, -2.0, 5.0]), np.array([20.0, 0.0, 45.0])
     expected = ry(b) @ (rz(c) @ (np.array(point) - r) - d) + d + r
-    joints = kins.inverse(EmcPose(*point, b=b, c=c))
+    joints = kins.inverse(Pose(*point, b=b, c=c))
     assert joints == pytest.approx([*expected, b, c], abs=1e-9)
 
 
 def test_trt_coordinates_map_the_joints_and_pass_others_through() -> None:
     kins = load_kinematics("xyzac-trt-kins", coordinates="xyzacw")
     assert kins.num_joints == 6
-    joints = kins.inverse(EmcPose(1, 2, 3, a=0, c=0, w=7))
+    joints = kins.inverse(Pose(1, 2, 3, a=0, c=0, w=7))
     assert joints == pytest.approx([1, 2, 3, 0, 0, 7])
     with pytest.raises(KinematicsError, match="required coordinates xyzac"):
         load_kinematics("xyzac-trt-kins", coordinates="xyzab")
 
 
-@pytest.mark.parametrize("pose", [EmcPose(0, 0, -50), EmcPose(30, -40, -120), EmcPose(-70, 0, 10)])
-def test_lineardelta_rods_keep_their_length(pose: EmcPose) -> None:
+@pytest.mark.parametrize("pose", [Pose(0, 0, -50), Pose(30, -40, -120), Pose(-70, 0, 10)])
+def test_lineardelta_rods_keep_their_length(pose: Pose) -> None:
     """Each carriage (on a tower at 120 degree steps on radius R, the first on +Y) is one rod
     length L from the effector."""
     kins = load_kinematics("lineardeltakins")
@@ -240,7 +240,7 @@ def test_rotarydelta_shins_keep_their_length(joints: list[float]) -> None:
 def test_genhexkins_struts_join_base_and_platform_points() -> None:
     kins = load_kinematics("genhexkins")
     pins = own(kins).pins
-    pose = EmcPose(1, -2, 20, a=3, b=-4, c=5)
+    pose = Pose(1, -2, 20, a=3, b=-4, c=5)
     struts = kins.inverse(pose)
     rot = np.array(rpy_matrix(*(math.radians(v) for v in (pose.a, pose.b, pose.c)))).T
     for i, length in enumerate(struts):
@@ -253,12 +253,12 @@ def test_genhexkins_struts_join_base_and_platform_points() -> None:
 def test_tripod_struts_and_the_side_of_the_base() -> None:
     kins = load_kinematics("tripodkins")
     kins.pins.Bx, kins.pins.Cx, kins.pins.Cy = 10.0, 4.0, 8.0
-    below = EmcPose(3, 2, -6)
+    below = Pose(3, 2, -6)
     lengths = kins.inverse(below)
     for base, length in zip([(0, 0, 0), (10, 0, 0), (4, 8, 0)], lengths, strict=True):
         assert math.dist(base, (3, 2, -6)) == pytest.approx(length)
     assert kins.forward(lengths).z == pytest.approx(-6)  # the side inverse was on
-    kins.inverse(EmcPose(3, 2, 6))
+    kins.inverse(Pose(3, 2, 6))
     assert kins.forward(lengths).z == pytest.approx(6)
 
 
@@ -281,7 +281,7 @@ def test_maxkins_table_rotation_turns_the_work_and_keeps_linuxcncs_quirks() -> N
     pose = kins.forward([10, 0, 0, 0, 0, 90, 0, 0, 0])
     assert (pose.x, pose.y) == pytest.approx((0, 10), abs=1e-9)
     # as LinuxCNC's: forward adds U sin(B) to Z where inverse should have taken it off
-    back = kins.forward(kins.inverse(EmcPose(1, 2, 3, b=30, u=0.2)))
+    back = kins.forward(kins.inverse(Pose(1, 2, 3, b=30, u=0.2)))
     assert back.z == pytest.approx(3 + 2 * 0.2 * math.sin(math.radians(30)))
 
 
@@ -329,12 +329,12 @@ def test_scara_puma_scorbot_known_poses() -> None:
     pose = scorbot.forward([90, 90, 0, 0, 0])  # upper arm up, forearm out along +Y
     assert (pose.x, pose.y, pose.z) == pytest.approx((0, 16 + 221, 140 + 221), abs=1e-9)
     with pytest.raises(KinematicsError, match="out of the arm's reach"):
-        scorbot.inverse(EmcPose(1000, 0, 0))
+        scorbot.inverse(Pose(1000, 0, 0))
 
 
 def test_rosekins_counts_turns_across_minus_x() -> None:
     kins = load_kinematics("rosekins")
-    angles = [kins.inverse(EmcPose(math.cos(t), math.sin(t), 0))[2] for t in (3.0, 3.3, 3.6)]
+    angles = [kins.inverse(Pose(math.cos(t), math.sin(t), 0))[2] for t in (3.0, 3.3, 3.6)]
     assert angles[1] > angles[0] and angles[2] > angles[1]  # keeps turning the same way
     assert angles[1] == pytest.approx(math.degrees(3.3))
     assert kins.pins.revolutions == 1
@@ -346,7 +346,7 @@ def test_switchkins_types_and_pins() -> None:
     pins = kins.type_pins
     own(kins).pins.z_offset = 10.0
     assert (pins.is_0, pins.is_1, pins.is_2) == (True, False, False)
-    tilted = EmcPose(10, 0, 0, a=90)
+    tilted = Pose(10, 0, 0, a=90)
     assert kins.inverse(tilted) != pytest.approx([10, 0, 0, 90, 0])
     kins.switch(1)  # identity
     assert (pins.is_0, pins.is_1, pins.is_2) == (False, True, False)
@@ -363,7 +363,7 @@ def test_switchkins_types_and_pins() -> None:
 def test_identityfirst_swaps_the_first_two_types() -> None:
     kins = load_kinematics("xyzac-trt-kins", sparm="identityfirst")
     kins.types[1].pins.z_offset = 10.0
-    tilted = EmcPose(10, 0, 0, a=90)
+    tilted = Pose(10, 0, 0, a=90)
     assert kins.inverse(tilted) == pytest.approx([10, 0, 0, 90, 0])
     kins.switch(1)
     assert kins.inverse(tilted) != pytest.approx([10, 0, 0, 90, 0])
@@ -371,10 +371,10 @@ def test_identityfirst_swaps_the_first_two_types() -> None:
 
 def test_millturn_lathe_type_maps_xyz_to_joints() -> None:
     kins = load_kinematics("millturn")
-    assert kins.inverse(EmcPose(1, 2, 3, 4)) == pytest.approx([1, 2, 3, 4])
+    assert kins.inverse(Pose(1, 2, 3, 4)) == pytest.approx([1, 2, 3, 4])
     kins.switch(1)
-    assert kins.forward([3, -2, 1, 4]) == EmcPose(1, 2, 3, 4)  # X = j2, Y = -j1, Z = j0
-    assert kins.inverse(EmcPose(1, 2, 3, 4)) == pytest.approx([3, -2, 1, 4])
+    assert kins.forward([3, -2, 1, 4]) == Pose(1, 2, 3, 4)  # X = j2, Y = -j1, Z = j0
+    assert kins.inverse(Pose(1, 2, 3, 4)) == pytest.approx([3, -2, 1, 4])
 
 
 # --------------------------------------------------------------- joint counts
@@ -382,10 +382,10 @@ def test_bare_trivkins_seen_through_fewer_joints() -> None:
     """``loadrt trivkins`` maps nine joints; motion with num_joints=3 is an XYZ machine."""
     kins = fit_joints(load_kinematics("trivkins"), 3)
     assert kins.num_joints == 3 and kins.axis_mask == 0b111
-    assert kins.inverse(EmcPose(1, 2, 3, 4)) == [1, 2, 3]
-    assert kins.forward([1, 2, 3]) == EmcPose(1, 2, 3)
-    pose, joints = kins.home(EmcPose(), [4, 5, 6])
-    assert joints == [4, 5, 6] and pose == EmcPose(4, 5, 6)
+    assert kins.inverse(Pose(1, 2, 3, 4)) == [1, 2, 3]
+    assert kins.forward([1, 2, 3]) == Pose(1, 2, 3)
+    pose, joints = kins.home(Pose(), [4, 5, 6])
+    assert joints == [4, 5, 6] and pose == Pose(4, 5, 6)
 
 
 # --------------------------------------------------------------- realtime hygiene
@@ -393,7 +393,7 @@ def test_transformations_leave_no_cycles(collector_off) -> None:
     """Motion calls them every servo period in a host without a garbage collector
     (tests/motion/test_rt_garbage.py): they must leave no reference cycles behind."""
     modules = [(name, *ROUND_TRIPS[name][::2]) for name in ROUND_TRIPS]
-    modules += [(name, {}, [EmcPose(300, 50, -300)]) for name in ("genserkins", "millturn")]
+    modules += [(name, {}, [Pose(300, 50, -300)]) for name in ("genserkins", "millturn")]
     made = [(load_kinematics(name, **params), poses) for name, params, poses in modules]
     gc.collect()
     for kins, poses in made:

@@ -7,8 +7,8 @@ import math
 
 import numpy as np
 
-from motion.pose import NUM_AXES
 from motion.tp.geometry import LinePiece, blend_arc, circle_piece, cross3, norm
+from nml.axes import NUM_AXES
 
 RNG = np.random.default_rng(20261121)
 

@@ -9,6 +9,8 @@ interpreter's own state.
 
 from __future__ import annotations
 
+from nml.pose import AXIS_NAMES, Pose
+
 from ..params import PA_GLOBAL, PA_READONLY
 from ..reader import RS274NGC_MAX_PARAMETERS
 
@@ -85,9 +87,8 @@ _SAME = (
 # ``tool_change_flag`` (which forces a synch here, as they mean it to)
 _ALIASES = {"tool_change_flag": "toolchange_flag", "loggingLevel": "log_level"}
 # view attribute -> (interpreter list attribute, index): positions and offsets by axis
-_AXES = "xyzabcuvw"
 _ITEMS: dict[str, tuple[str, int]] = {}
-for _k, _axis in enumerate(_AXES):
+for _k, _axis in enumerate(AXIS_NAMES):
     if _k < 3:
         _names_of = (f"current_{_axis}", f"axis_offset_{_axis}", f"origin_offset_{_axis}")
     else:
@@ -317,46 +318,42 @@ class Blocks:
         return len(self._interp.remap_blocks)
 
 
-class EmcPose:
-    """A 9-axis pose with LinuxCNC's attribute names (``x`` ... ``w``, ``tran.x``)."""
+class EmcPose(Pose):
+    """LinuxCNC's Python view of a pose (``self.tool_offset``, a tool's ``offset``): a
+    ``nml.pose.Pose`` that also reads as LinuxCNC's struct (``tran.x``) and hands every
+    change to ``store`` (the nine values), so a handler's write reaches the interpreter."""
+
+    __slots__ = ("_store",)
 
     def __init__(self, values, store=None) -> None:
-        object.__setattr__(self, "_values", list(values))
+        object.__setattr__(self, "_store", None)  # (the fields are set first)
+        super().__init__(*(float(v) for v in values))
         object.__setattr__(self, "_store", store)
 
     @staticmethod
     def values_of(value) -> list[float]:
-        if isinstance(value, EmcPose):
-            return value.as_list()
         return [float(v) for v in value]
 
     def as_list(self) -> list[float]:
-        return list(self._values)
+        return list(self.as_tuple())
 
     @property
     def tran(self) -> EmcPose:
         return self
 
-    def __getattr__(self, name: str) -> float:
-        index = _AXES.find(name)
-        if len(name) != 1 or index < 0:
-            raise AttributeError(name)
-        return self._values[index]
-
     def __setattr__(self, name: str, value: float) -> None:
-        index = _AXES.find(name)
-        if len(name) != 1 or index < 0:
+        if len(name) != 1 or name not in AXIS_NAMES:
             raise AttributeError(name)
-        self._values[index] = float(value)
+        object.__setattr__(self, name, float(value))
         if self._store is not None:
-            self._store(list(self._values))
+            self._store(self.as_list())
 
     def zero(self) -> None:
-        for axis in _AXES:
+        for axis in AXIS_NAMES:
             setattr(self, axis, 0.0)
 
     def __str__(self) -> str:
-        text = " ".join(f"{a}={v:.4f}" for a, v in zip(_AXES, self._values, strict=True))
+        text = " ".join(f"{a}={v:.4f}" for a, v in zip(AXIS_NAMES, self, strict=True))
         return f"EmcPose({text})"
 
 
@@ -403,7 +400,7 @@ class ToolView:
 
     def __str__(self) -> str:
         e = self._entry
-        offset = " ".join(f"{a}={v:.4f}" for a, v in zip(_AXES, e.offset, strict=True))
+        offset = " ".join(f"{a}={v:.4f}" for a, v in zip(AXIS_NAMES, e.offset, strict=True))
         return (
             f"Tool(T{e.toolno} D{e.diameter:.4f} I{e.frontangle:.4f} J{e.backangle:.4f} "
             f"Q{e.orientation} offset: {offset})"
