@@ -23,7 +23,7 @@ import json
 import sys
 import time
 import traceback
-from collections.abc import Awaitable, Callable
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -44,6 +44,7 @@ from cnc.ui.web.rpc import EVENT_OF_TYPE, Rpc, notification
 from cnc.ui.web.settings import Settings
 from cnc.ui.web.status import DISCONNECTED, FIELDS, diff, snapshot
 from hal.core import HalError
+from nml.commands import Handlers, Refused, handler
 
 WORKERS = 8  # commands waiting for the controller at once
 URGENT_WORKERS = 2  # for stops, which must never queue behind long MDI lines
@@ -141,14 +142,7 @@ class Hub:
         self._tasks: set[asyncio.Task[Any]] = set()
         self._position: list[float] | None = None  # machine position of the last poll
         self.rpc = Rpc(self)  # the public API: every client's requests come through it
-        self.handlers: dict[str, Callable[[Client, dict[str, Any]], Awaitable[dict[str, Any]]]]
-        self.handlers = {
-            "answer": self._answer_dialog,
-            "jog": self._jog,
-            "check_program": self._check_program,
-            "probe": self._start_probe,
-            "probe_confirm": self._confirm_probe,
-        }
+        self.handlers = Handlers(self)  # the commands answered here (@handler below)
 
     # ---------------------------------------------------------------- status
     def poll(self) -> list[dict[str, Any]]:
@@ -274,47 +268,51 @@ class Hub:
     # ---------------------------------------------------------------- requests
     async def dispatch(self, client: Client, request: dict[str, Any]) -> dict[str, Any]:
         """Run one command ``{"cmd": NAME, ...arguments}`` of a client whose scope rpc.py
-        checked; its outcome ``{"status": "DONE"|"ERROR", "message", ...}``."""
+        checked; its outcome ``{"status": "DONE"|"ERROR", "message", ...}``. A refusal
+        (``Refused``, a ``CommandError``) is the ERROR outcome, here only; an unexpected
+        exception goes on to rpc.py, which answers it as an internal error."""
         name = request.get("cmd")
-        handler = self.handlers.get(name) if isinstance(name, str) else None
-        if handler is not None:
-            outcome = await handler(client, request)
-        elif not self.status.get("is_connected") and name not in ALWAYS_SENT:
-            outcome = {
-                "status": "ERROR",
-                "message": f"{name}: refused, the controller is offline (not running)",
-            }
-        else:
-            if name == "run" and isinstance(request.get("line", 0), int):
-                self.tracker.expect_start(request.get("line", 0), time.monotonic())
-            if is_urgent(request):
-                outcome = await self._execute(request)
-            else:
-                async with client.order_lock(str(name)):
-                    outcome = await self._execute(request)
+        try:
+            outcome = await self._dispatch(client, name, request)
+        except Refused as refusal:
+            outcome = {"status": "ERROR", "message": refusal.reason,
+                       "is_reported": refusal.is_quiet}  # fmt: skip
         if name in ("mdi", "macro"):
             await self.broadcast({"type": "history", "lines": list(self.commands.mdi_history)})
         return outcome
 
+    async def _dispatch(self, client: Client, name: Any, request: dict[str, Any]) -> dict[str, Any]:
+        handler = self.handlers.get(name) if isinstance(name, str) else None
+        if handler is not None:
+            return await handler(client, request)
+        if not self.status.get("is_connected") and name not in ALWAYS_SENT:
+            raise Refused(f"{name}: refused, the controller is offline (not running)")
+        if name == "run" and isinstance(request.get("line", 0), int):
+            self.tracker.expect_start(request.get("line", 0), time.monotonic())
+        if is_urgent(request):
+            return await self._execute(request)
+        async with client.order_lock(str(name)):
+            return await self._execute(request)
+
     async def _execute(self, request: dict[str, Any]) -> dict[str, Any]:
+        """A controller command (commands.py), in a worker thread; CommandError."""
         loop = asyncio.get_running_loop()
         executor = self.urgent_executor if is_urgent(request) else self.executor
-        try:
-            message = await loop.run_in_executor(executor, self.commands.run, request)
-        except CommandError as exc:
-            return {"status": "ERROR", "message": str(exc), "is_reported": exc.is_reported}
+        message = await loop.run_in_executor(executor, self.commands.run, request)
         return {"status": "DONE", "message": message}
 
+    @handler("answer")
     async def _answer_dialog(self, client: Client, request: dict[str, Any]) -> dict[str, Any]:
         """{"cmd": "answer", "name": pin name, "is_yes": bool}: close the dialog everywhere."""
         try:
             closing = self.messages.answer(request.get("name"), request.get("is_yes"))
         except ValueError as exc:
-            return {"status": "ERROR", "message": f"answer: {exc}"}
+            raise Refused(f"answer: {exc}") from None
         await self.broadcast(closing)
         return {"status": "DONE", "message": "DONE"}
 
     # ---------------------------------------------------------------- jogs
+    @handler("jog")
     async def _jog(self, client: Client, request: dict[str, Any]) -> dict[str, Any]:
         """Jogs: "hold" refreshes a continuous jog's lease here; the others go to the
         controller, in the order the page sent them (a stop never overtakes its start)."""
@@ -322,29 +320,32 @@ class Hub:
         try:
             joint = self.commands.joint_of(request)
         except CommandError as exc:
-            return {"status": "ERROR", "message": f"jog: {exc}"}
+            raise Refused(f"jog: {exc}") from None
         if action == "hold":
             if joint in client.jogs:
                 client.jogs[joint] = time.monotonic()
                 return {"status": "DONE", "message": "DONE"}
-            return {"status": "ERROR", "message": "jog: no continuous jog to hold"}
+            raise Refused("jog: no continuous jog to hold")
         if not self.status.get("is_connected") and action != "stop":
-            return {"status": "ERROR", "message": "jog: refused, the controller is offline"}
+            raise Refused("jog: refused, the controller is offline")
         async with client.jog_lock:
             if action == "start":
                 client.jogs[joint] = time.monotonic()
             elif action == "stop":
                 client.jogs.pop(joint, None)
-            outcome = await self._execute(request)
-            if action == "start" and outcome["status"] != "DONE":
-                client.jogs.pop(joint, None)
-        return outcome
+            try:
+                return await self._execute(request)
+            except Exception:
+                if action == "start":
+                    client.jogs.pop(joint, None)
+                raise
 
     async def _stop_jog(self, client: Client, joint: int) -> None:
         if client.jogs.pop(joint, None) is None:
             return  # stopped already
         async with client.jog_lock:
-            await self._execute({"cmd": "jog", "action": "stop", "joint": joint})
+            with contextlib.suppress(CommandError):  # (said on the error channel, or offline)
+                await self._execute({"cmd": "jog", "action": "stop", "joint": joint})
         if not client.socket.closed:
             text = "jog stopped: the page stopped holding it (a key or button released late?)"
             await self.notify(client, {"type": "notice", "kind": "error", "text": text})
@@ -355,26 +356,28 @@ class Hub:
             await self._stop_jog(client, joint)
 
     # ---------------------------------------------------------------- editor
+    @handler("check_program")
     async def _check_program(self, client: Client, request: dict[str, Any]) -> dict[str, Any]:
         """{"cmd": "check_program", "text": ...}: the preview interpreter's errors."""
         text = request.get("text")
         if not isinstance(text, str):
-            return {"status": "ERROR", "message": "check_program: 'text' must be a text"}
+            raise Refused("check_program: 'text' must be a text")
         try:
             found = await self.jobs.check(text)
         except RuntimeError as exc:
-            return {"status": "ERROR", "message": f"check_program: {exc}"}
+            raise Refused(f"check_program: {exc}") from None
         return {"status": "DONE", "message": "DONE", "errors": found["errors"],
                 "points": found["points"]}  # fmt: skip
 
     # ---------------------------------------------------------------- probing
+    @handler("probe")
     async def _start_probe(self, client: Client, request: dict[str, Any]) -> dict[str, Any]:
         """{"cmd": "probe", "kind": ..., "params": {...}}: a probing helper, run step by
         step in a worker thread; every page sees its steps ("probe" messages)."""
         if self.probe.state == "running":
-            return {"status": "ERROR", "message": "probe: a probing helper runs already"}
+            raise Refused("probe: a probing helper runs already")
         if not self.status.get("is_connected"):
-            return {"status": "ERROR", "message": "probe: refused, the controller is offline"}
+            raise Refused("probe: refused, the controller is offline")
         params = request.get("params", {})
         loop = asyncio.get_running_loop()
         try:
@@ -384,7 +387,7 @@ class Hub:
                 self.settings.tool_sensor,
             )  # fmt: skip
         except (probing.ProbeError, cnc.error) as exc:
-            return {"status": "ERROR", "message": f"probe: {exc}"}
+            raise Refused(f"probe: {exc}") from None
         plan.is_incremental = "G91" in str(self.status.get("gcodes", "")).split()
         self.probe = ProbeState(plan.kind, [step.text for step in plan.steps], 0, "running")
         await self.broadcast(self.probe.message_for_pages())
@@ -417,12 +420,13 @@ class Hub:
             self.probe.current = len(plan.steps)
         await self.broadcast(self.probe.message_for_pages())
 
+    @handler("probe_confirm")
     async def _confirm_probe(self, client: Client, request: dict[str, Any]) -> dict[str, Any]:
         """{"cmd": "probe_confirm", "system": "G54", "values": {"X": 0}} (a position),
         {"tool": n} or {"is_reference": true} (a tool length): set what was probed."""
         result = self.probe.result
         if self.probe.state != "done" or result is None:
-            return {"status": "ERROR", "message": "probe_confirm: nothing probed to confirm"}
+            raise Refused("probe_confirm: nothing probed to confirm")
         if result["kind"] == "tool_length" and request.get("is_reference"):
             self.tool_setter_reference_z = result["touch_z"]
             self.probe.state = "confirmed"
@@ -440,7 +444,7 @@ class Hub:
         try:
             await loop.run_in_executor(self.executor, set_it)
         except (CommandError, probing.ProbeError, cnc.error) as exc:
-            return {"status": "ERROR", "message": f"probe_confirm: {exc}"}
+            raise Refused(f"probe_confirm: {exc}") from None
         self.probe.state = "confirmed"
         await self.broadcast(self.probe.message_for_pages())
         return {"status": "DONE", "message": "DONE"}

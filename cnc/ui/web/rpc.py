@@ -22,14 +22,13 @@ from __future__ import annotations
 
 import asyncio
 import json
-import sys
-import traceback
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from cnc.apikeys import CONFIGURE, OPERATE, READ
 from cnc.ui.web.commands import CommandError
+from nml.commands import Handlers, Refused, handler, internal_error
 
 if TYPE_CHECKING:
     from cnc.ui.web.hub import Client, Hub
@@ -308,22 +307,7 @@ class Rpc:
 
     def __init__(self, hub: Hub) -> None:
         self.hub = hub
-        self.services: dict[str, Service] = {
-            "api.version": self._version,
-            "api.methods": self._methods,
-            "api.identity": self._identity,
-            "status.get": self._status_get,
-            "status.subscribe": self._status_subscribe,
-            "status.unsubscribe": self._status_unsubscribe,
-            "events.subscribe": self._events_subscribe,
-            "events.unsubscribe": self._events_unsubscribe,
-            "page.config": self._page_config,
-            "offsets.list": lambda client, params: hub.offsets(),
-            "tools.list": lambda client, params: hub.tools(),
-            "files.list": self._files_list,
-            "files.get": self._files_get,
-            "files.delete": self._files_delete,
-        }
+        self.services: dict[str, Service] = Handlers(self)  # the @handler methods below
 
     async def handle(self, client: Client, text: str | bytes) -> str | None:
         """One message: a call or a batch; the reply's text, or None (nothing to answer)."""
@@ -354,9 +338,11 @@ class Rpc:
             result = await self._run(client, request)
         except RpcError as exc:
             return None if is_notification else _error(exc.code, exc.message, exc.data, id_)
+        except Refused as refusal:  # the server's or the controller's (said already)
+            data = {"is_reported": True} if refusal.is_quiet else None
+            return None if is_notification else _error(REFUSED, refusal.reason, data, id_)
         except Exception as exc:  # a bug: said, answered, and the server goes on
-            traceback.print_exc(file=sys.stderr)
-            message = f"internal error: {type(exc).__name__}: {exc}"
+            message = internal_error("web", f"in {request.get('method')}", exc).reason
             return None if is_notification else _error(INTERNAL_ERROR, message, None, id_)
         return None if is_notification else {"jsonrpc": "2.0", "id": id_, "result": result}
 
@@ -372,23 +358,24 @@ class Rpc:
             raise RpcError(FORBIDDEN, f"{name}: needs the {method.scope} scope ({who} has not)")
         params = check_params(name, method, request.get("params"))
         if method.needs_socket and client.socket is None:
-            raise RpcError(REFUSED, f"{name}: only over the websocket (/api/v1/ws)")
+            raise Refused(f"{name}: only over the websocket (/api/v1/ws)")
         if method.command is None:
             return await self.services[name](client, params)
         if (
             name == "jog" and params.get("action") in ("start", "hold") and client.socket is None
         ):  # a continuous jog lives while its websocket holds it
-            raise RpcError(REFUSED, "jog: a continuous jog needs the websocket (/api/v1/ws)")
+            raise Refused("jog: a continuous jog needs the websocket (/api/v1/ws)")
         outcome = await self.hub.dispatch(client, {**params, "cmd": method.command})
         if outcome["status"] != "DONE":
-            data = {"is_reported": True} if outcome.get("is_reported") else None
-            raise RpcError(REFUSED, outcome["message"], data)
+            raise Refused(outcome["message"], is_quiet=bool(outcome.get("is_reported")))
         return {key: value for key, value in outcome.items() if key != "status"}
 
     # ---------------------------------------------------------------- services
+    @handler("api.version")
     async def _version(self, client: Client, params: dict[str, Any]) -> Any:
         return {"api": "v1", "version": API_VERSION, "server": "cnc ui web"}
 
+    @handler("api.methods")
     async def _methods(self, client: Client, params: dict[str, Any]) -> Any:
         return {
             name: {"scope": m.scope, "summary": m.summary, "websocket_only": m.needs_socket,
@@ -397,6 +384,7 @@ class Rpc:
             for name, m in METHODS.items()
         }  # fmt: skip
 
+    @handler("api.identity")
     async def _identity(self, client: Client, params: dict[str, Any]) -> Any:
         identity = client.identity
         return {"name": identity.name, "scopes": sorted(identity.scopes)}
@@ -412,21 +400,25 @@ class Rpc:
             raise RpcError(INVALID_PARAMS, f"unknown status field {unknown[0]!r}")
         return frozenset(fields)
 
+    @handler("status.get")
     async def _status_get(self, client: Client, params: dict[str, Any]) -> Any:
         fields = self._fields(params)
         status = self.hub.status
         return dict(status) if fields is None else {k: status.get(k) for k in sorted(fields)}
 
+    @handler("status.subscribe")
     async def _status_subscribe(self, client: Client, params: dict[str, Any]) -> Any:
         fields = self._fields(params)
         client.status_fields = fields if fields is not None else self.hub.status_fields()
         # what it is now; every change after this comes as notify.status
         return {k: self.hub.status.get(k) for k in sorted(client.status_fields)}
 
+    @handler("status.unsubscribe")
     async def _status_unsubscribe(self, client: Client, params: dict[str, Any]) -> Any:
         client.status_fields = frozenset()
         return {}
 
+    @handler("events.subscribe")
     async def _events_subscribe(self, client: Client, params: dict[str, Any]) -> Any:
         kinds = params.get("events") or list(EVENTS)
         unknown = [kind for kind in kinds if kind not in EVENTS]
@@ -437,25 +429,38 @@ class Rpc:
             await self.hub.notify(client, message)
         return {"events": sorted(client.events)}
 
+    @handler("events.unsubscribe")
     async def _events_unsubscribe(self, client: Client, params: dict[str, Any]) -> Any:
         client.events = frozenset()
         return {}
 
+    @handler("page.config")
     async def _page_config(self, client: Client, params: dict[str, Any]) -> Any:
         return self.hub.page_config(client.identity.allows(OPERATE))
 
+    @handler("files.list")
     async def _files_list(self, client: Client, params: dict[str, Any]) -> Any:
         return {"files": await self.hub.in_worker(self.hub.commands.program_files)}
 
+    @handler("files.get")
     async def _files_get(self, client: Client, params: dict[str, Any]) -> Any:
         try:
             return await self.hub.in_worker(self.hub.commands.program_text, params["file"])
         except CommandError as exc:
-            raise RpcError(REFUSED, f"files.get: {exc}") from None
+            raise Refused(f"files.get: {exc}") from None
 
+    @handler("files.delete")
     async def _files_delete(self, client: Client, params: dict[str, Any]) -> Any:
         try:
             await self.hub.in_worker(self.hub.commands.delete_program, params["file"])
         except CommandError as exc:
-            raise RpcError(REFUSED, f"files.delete: {exc}") from None
+            raise Refused(f"files.delete: {exc}") from None
         return {"file": params["file"]}
+
+    @handler("offsets.list")
+    async def _offsets_list(self, client: Client, params: dict[str, Any]) -> Any:
+        return await self.hub.offsets()
+
+    @handler("tools.list")
+    async def _tools_list(self, client: Client, params: dict[str, Any]) -> Any:
+        return await self.hub.tools()
