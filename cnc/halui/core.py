@@ -23,9 +23,24 @@ from typing import Any
 
 from cnc.api import constants as c
 from cnc.api.commands import serial_difference
+from cnc.api.errors import error
 from cnc.halui.config import AXIS_LETTERS, HaluiConfig
 from cnc.halui.pins import AdjustPins, JogPins, Pins
+from nml.commands import Handlers, Refused, handler, internal_error
 
+# The ``halui.*`` buttons that send one command each, in LinuxCNC's order
+MAIN_BUTTONS = (
+    "machine_on", "machine_off", "estop_activate", "estop_reset", "mode_manual", "mode_auto",
+    "mode_mdi", "mode_teleop", "mode_joint", "mist_on", "mist_off", "flood_on", "flood_off",
+    "lube_on", "lube_off", "program_run", "program_pause", "optional_stop_on",
+    "optional_stop_off", "block_delete_on", "block_delete_off", "program_resume",
+    "program_step", "program_stop", "abort",
+)  # fmt: skip
+_MACHINE_STATES = {"machine_on": c.STATE_ON, "machine_off": c.STATE_OFF,
+                   "estop_activate": c.STATE_ESTOP, "estop_reset": c.STATE_ESTOP_RESET}  # fmt: skip
+_MODES = {"mode_manual": c.MODE_MANUAL, "mode_auto": c.MODE_AUTO, "mode_mdi": c.MODE_MDI}
+_PROGRAM_ACTIONS = {"program_pause": c.AUTO_PAUSE, "program_resume": c.AUTO_RESUME,
+                    "program_step": c.AUTO_STEP}  # fmt: skip
 JOINT_JOG, AXIS_JOG = 1, 0  # jog()'s jjogmode
 SPEED_EPSILON = 1e-5  # a jog-speed change smaller than this does not restart running jogs
 
@@ -51,7 +66,7 @@ class Halui:
         first_axis = config.axes[0]
         pins.axes[first_axis].is_selected = True
         pins.main.axis_selected = AXIS_LETTERS.index(first_axis)
-        self._buttons = self._main_buttons()
+        self.handlers = Handlers(self)  # the main buttons' (@handler below)
 
     def step(self) -> None:
         """One cycle; ``cnc.error`` (nothing done) while the controller is not running."""
@@ -77,61 +92,104 @@ class Halui:
         return self._rose_value(f"{pins.name}.{attr}", getattr(pins, attr))
 
     # ================================================================ inputs -> commands
-    def _main_buttons(self) -> list[tuple[str, Callable[[], Any]]]:
-        """The ``halui.*`` buttons that send one command each, in LinuxCNC's order."""
-        cmd = self.command
-        return [
-            ("machine_on", lambda: cmd.state(c.STATE_ON)),
-            ("machine_off", lambda: cmd.state(c.STATE_OFF)),
-            ("estop_activate", lambda: cmd.state(c.STATE_ESTOP)),
-            ("estop_reset", lambda: cmd.state(c.STATE_ESTOP_RESET)),
-            ("mode_manual", lambda: self._set_mode(c.MODE_MANUAL)),
-            ("mode_auto", lambda: self._set_mode(c.MODE_AUTO)),
-            ("mode_mdi", lambda: self._set_mode(c.MODE_MDI)),
-            ("mode_teleop", lambda: self._set_teleop(True)),
-            ("mode_joint", lambda: self._set_teleop(False)),
-            ("mist_on", lambda: cmd.mist(c.MIST_ON)),
-            ("mist_off", lambda: cmd.mist(c.MIST_OFF)),
-            ("flood_on", lambda: cmd.flood(c.FLOOD_ON)),
-            ("flood_off", lambda: cmd.flood(c.FLOOD_OFF)),
-            ("lube_on", lambda: cmd.lube(True)),
-            ("lube_off", lambda: cmd.lube(False)),
-            ("program_run", self._run_program),
-            ("program_pause", lambda: cmd.auto(c.AUTO_PAUSE)),
-            ("optional_stop_on", lambda: cmd.set_optional_stop(1)),
-            ("optional_stop_off", lambda: cmd.set_optional_stop(0)),
-            ("block_delete_on", lambda: cmd.set_block_delete(1)),
-            ("block_delete_off", lambda: cmd.set_block_delete(0)),
-            ("program_resume", lambda: cmd.auto(c.AUTO_RESUME)),
-            ("program_step", lambda: cmd.auto(c.AUTO_STEP)),
-            ("program_stop", cmd.abort),
-            ("abort", cmd.abort),
-        ]
-
     def _act(self) -> None:
+        """Every input that changed, each through ``_carry_out``: the main buttons in
+        LinuxCNC's order (the order they act in when several rise in one cycle), then
+        the overrides, spindles, joints, jogs and MDI buttons."""
         pins, cmd, config = self.pins, self.command, self.config
-        for attr, action in self._buttons:
-            if self._rose(pins.main, attr):
-                action()
-        self._adjust(pins.max_velocity, cmd.maxvel, 0.0, config.max_velocity)
-        self._adjust(pins.feed_override, cmd.feedrate, 0.0, config.max_feed_override)
-        self._adjust(pins.rapid_override, cmd.rapidrate, 0.0, 1.0)
+        for button in MAIN_BUTTONS:
+            if self._rose(pins.main, button):
+                self._carry_out(button, self.handlers[button], button)
+        self._carry_out("max-velocity", self._adjust, pins.max_velocity, cmd.maxvel, 0.0,
+                        config.max_velocity)  # fmt: skip
+        self._carry_out("feed-override", self._adjust, pins.feed_override, cmd.feedrate, 0.0,
+                        config.max_feed_override)  # fmt: skip
+        self._carry_out("rapid-override", self._adjust, pins.rapid_override, cmd.rapidrate,
+                        0.0, 1.0)  # fmt: skip
         for n, spindle in enumerate(pins.spindles):
-            self._adjust(
+            self._carry_out(
+                f"spindle.{n}.override",
+                self._adjust,
                 pins.spindle_overrides[n],
                 lambda v, n=n: cmd.spindleoverride(v, n),
                 config.min_spindle_override,
                 config.max_spindle_override,
             )
-            self._spindle_buttons(n, spindle)
+            self._carry_out(f"spindle.{n}", self._spindle_buttons, n, spindle)
         if pins.home_all is not None and self._rose(pins.home_all, "home_all"):
-            cmd.home(-1)
-        self._joint_buttons()
-        self._jogs()
+            self._carry_out("home-all", cmd.home, -1)
+        self._carry_out("joint", self._joint_buttons)
+        self._carry_out("jog", self._jogs)
         for n, text in enumerate(config.mdi_commands):
             if self._rose_value(f"halui.mdi-command-{n:02d}", pins.main.mdi_command[n]):
-                self._run_mdi(n, text)
+                self._carry_out(f"mdi-command-{n:02d}", self._run_mdi, n, text)
 
+    @staticmethod
+    def _carry_out(name: str, function: Callable[..., Any], *args: Any) -> None:
+        """Run the handler of input ``name``. A refusal (``Refused``) is said on stderr,
+        where LinuxCNC's halui says what it does not do; any other exception but the
+        controller's absence (``cnc.error``, which the process loop waits out) is an
+        internal error, said, and halui goes on (nml/commands.py)."""
+        try:
+            function(*args)
+        except Refused as refusal:
+            if not refusal.is_quiet:
+                warn(refusal.reason)
+        except error:
+            raise
+        except Exception as exc:
+            said = internal_error("halui", f"in {name}", exc).reason  # ("halui: ...")
+            print(said, file=sys.stderr, flush=True)
+
+    # ---------------------------------------------------------------- main buttons
+    @handler("machine_on", "machine_off", "estop_activate", "estop_reset")
+    def _machine(self, button: str) -> None:
+        self.command.state(_MACHINE_STATES[button])
+
+    @handler("mode_manual", "mode_auto", "mode_mdi")
+    def _mode(self, button: str) -> None:
+        self._set_mode(_MODES[button])
+
+    @handler("mode_teleop", "mode_joint")
+    def _teleop(self, button: str) -> None:
+        self._set_teleop(button == "mode_teleop")
+
+    @handler("mist_on", "mist_off")
+    def _mist(self, button: str) -> None:
+        self.command.mist(c.MIST_ON if button == "mist_on" else c.MIST_OFF)
+
+    @handler("flood_on", "flood_off")
+    def _flood(self, button: str) -> None:
+        self.command.flood(c.FLOOD_ON if button == "flood_on" else c.FLOOD_OFF)
+
+    @handler("lube_on", "lube_off")
+    def _lube(self, button: str) -> None:
+        self.command.lube(button == "lube_on")
+
+    @handler("program_run")
+    def _run_program(self, _button: str) -> None:
+        if not self.stat.file:
+            return  # no program open: nothing to run
+        self._set_mode(c.MODE_AUTO)
+        self.command.auto(c.AUTO_RUN, 0)
+
+    @handler("program_pause", "program_resume", "program_step")
+    def _program(self, button: str) -> None:
+        self.command.auto(_PROGRAM_ACTIONS[button])
+
+    @handler("optional_stop_on", "optional_stop_off")
+    def _optional_stop(self, button: str) -> None:
+        self.command.set_optional_stop(int(button == "optional_stop_on"))
+
+    @handler("block_delete_on", "block_delete_off")
+    def _block_delete(self, button: str) -> None:
+        self.command.set_block_delete(int(button == "block_delete_on"))
+
+    @handler("program_stop", "abort")
+    def _abort(self, _button: str) -> None:
+        self.command.abort()
+
+    # ---------------------------------------------------------------- other inputs
     def _set_mode(self, mode: int) -> None:
         if self.stat.task_mode != mode:
             self.command.mode(mode)
@@ -139,12 +197,6 @@ class Halui:
     def _set_teleop(self, is_teleop: bool) -> None:
         self.command.teleop_enable(int(is_teleop))
         self.command.wait_complete()
-
-    def _run_program(self) -> None:
-        if not self.stat.file:
-            return  # no program open: nothing to run
-        self._set_mode(c.MODE_AUTO)
-        self.command.auto(c.AUTO_RUN, 0)
 
     def _adjust(
         self, pins: AdjustPins, send: Callable[[float], Any], low: float, high: float
@@ -334,8 +386,7 @@ class Halui:
             cmd.wait_complete()
             stat.poll()
             if stat.task_mode != c.MODE_MDI:
-                warn(f"mdi-command-{n:02d} not sent: task did not switch to MDI mode")
-                return
+                raise Refused(f"mdi-command-{n:02d} not sent: task did not switch to MDI mode")
         cmd.mdi(text)
         self._mdi_serial = cmd.serial
 

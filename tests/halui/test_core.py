@@ -401,3 +401,21 @@ def test_axis_positions_machine_and_relative(rig: Rig) -> None:
     assert x.pos_relative == pytest.approx(20.0 - 0.5)
     assert y.pos_relative == pytest.approx(-10.0)
     assert z.pos_relative == pytest.approx(31.0 - 1.0 - 2.0 - 5.0)
+
+
+def test_a_command_that_fails_unexpectedly_is_said_and_halui_goes_on(rig: Rig, capsys) -> None:
+    def mist(value: int) -> None:
+        raise ZeroDivisionError("a bug")
+
+    rig.command.mist = mist
+    main = rig.pins.main
+    main.mist_on = main.flood_on = True  # mist acts first, then flood
+    assert rig.cycle() == [("flood", c.FLOOD_ON)]
+    said = capsys.readouterr().err
+    assert "halui: internal error in mist_on: ZeroDivisionError: a bug" in said
+
+
+def test_every_main_button_has_one_handler(rig: Rig) -> None:
+    from cnc.halui.core import MAIN_BUTTONS
+
+    assert sorted(rig.halui.handlers) == sorted(MAIN_BUTTONS)
