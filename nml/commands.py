@@ -2,7 +2,9 @@
 iocontrol, the web server, halui).
 
 A receiver marks each handler with ``@handler(KEY, ...)`` (a message class, or a name for a
-UI's own requests) and builds its table once with ``Handlers(owner, ...)``. A handler
+UI's own requests) and builds its table once with ``Handlers(owner, ...)``. A receiver
+with a second kind of handler names its table: task's ``@handler(MSG, table=QUEUE)``
+steps carry a program's queued messages out, beside its commands' handlers. A handler
 carries its command out and returns (``RUNNING`` when the command goes on after the call:
 an MDI line), or raises ``Refused(reason)``. ``carry_out`` runs one handler and turns the
 result into an ``Answer``: ``Refused`` is the refusal, any other exception becomes an
@@ -52,46 +54,58 @@ class InternalError(Refused):
 # What a handler returns for a command that goes on after the call (answered DONE later)
 RUNNING = "running"
 
+COMMANDS = "commands"  # the table of a receiver's commands (the default)
+QUEUE = "queue"  # task's: the steps of a program's queued messages
 
-def handler(*keys: Key) -> Callable[[Callable], Callable]:
-    """Mark a function or method as the handler of ``keys`` (message classes or names)."""
+
+def handler(*keys: Key, table: str = COMMANDS) -> Callable[[Callable], Callable]:
+    """Mark a function or method as the handler of ``keys`` (message classes or names)
+    in its receiver's ``table``."""
 
     def mark(function: Callable) -> Callable:
-        function.handles = (*getattr(function, "handles", ()), *keys)  # type: ignore[attr-defined]
+        marks = ((table, key) for key in keys)
+        function.handles = (*getattr(function, "handles", ()), *marks)  # type: ignore[attr-defined]
         return function
 
     return mark
 
 
 class Handlers(dict):
-    """The handler of each key (``dict``), collected from the ``@handler`` marks of its
-    owners: objects (their methods, bound) or modules (their functions). A key handled
-    twice is refused."""
+    """The handler of each key (``dict``) in ``table``, collected from the ``@handler``
+    marks of its owners: objects (their methods, bound) or modules (their functions). A
+    key handled twice is refused."""
 
-    def __init__(self, *owners: object) -> None:
+    def __init__(self, *owners: object, table: str = COMMANDS) -> None:
         super().__init__()
         for owner in owners:
-            for key, function in _marked(owner):
+            for key, function in _marked(owner, table):
                 if key in self:
                     raise TypeError(f"{_name(key)} has two handlers")
                 self[key] = function
 
 
-def handled_by(cls: type) -> list[Key]:
+def handled_by(cls: type, table: str = COMMANDS) -> list[Key]:
     """The keys the ``@handler`` methods of a class handle (tests, documentation)."""
-    return [key for name in dir(cls) for key in getattr(getattr(cls, name), "handles", ())]
+    return [
+        key
+        for name in dir(cls)
+        for kind, key in getattr(getattr(cls, name), "handles", ())
+        if kind == table
+    ]
 
 
-def _marked(owner: object) -> Iterator[tuple[Key, Callable[..., Any]]]:
+def _marked(owner: object, table: str) -> Iterator[tuple[Key, Callable[..., Any]]]:
     if isinstance(owner, types.ModuleType):
         for function in vars(owner).values():
-            for key in getattr(function, "handles", ()):
-                yield key, function
+            for kind, key in getattr(function, "handles", ()):
+                if kind == table:
+                    yield key, function
         return
     cls = type(owner)
     for name in dir(cls):
-        for key in getattr(getattr(cls, name, None), "handles", ()):
-            yield key, getattr(owner, name)
+        for kind, key in getattr(getattr(cls, name, None), "handles", ()):
+            if kind == table:
+                yield key, getattr(owner, name)
 
 
 def _name(key: Key) -> str:

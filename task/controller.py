@@ -45,7 +45,17 @@ from nml.channels import (
     TOOL_STATUS,
     Nml,
 )
-from nml.commands import RUNNING, Handlers, Refused, carry_out, echo, handler, internal_error, unmet
+from nml.commands import (
+    QUEUE,
+    RUNNING,
+    Handlers,
+    Refused,
+    carry_out,
+    echo,
+    handler,
+    internal_error,
+    unmet,
+)
 from nml.errors import NmlError
 from nml.message import RCS_STATUS, MessageKind, Receiver, Requires
 from nml.outbox import Outbox
@@ -212,7 +222,8 @@ class Task:
         self.stuck_command_writer = 0  # the pid last reported holding emcCommand's lock
         self.bad_buffer_quiet_until = 0.0
         self.bad_buffer_reports = 0
-        self.handlers = Handlers(self)  # the @handler methods below
+        self.handlers = Handlers(self)  # the @handler methods below: commands
+        self.queue_steps = Handlers(self, table=QUEUE)  # and a program's queued messages
 
     # ================================================================ main loop
     def start(self) -> None:
@@ -843,7 +854,10 @@ class Task:
 
     # ================================================================ execution
     def _execute(self) -> None:
-        """Send queued messages in order, each when its preconditions hold."""
+        """Send queued messages in order, each when its preconditions hold: the step
+        declared for its type (``@handler(..., table=QUEUE)`` below), else
+        ``_pass_on``. A step returns whether the message is done with (then it leaves
+        the queue), or must be looked at again next cycle."""
         now = time.monotonic()
         while self.queue and not self.is_paused:
             if now < self.delay_until:
@@ -853,54 +867,85 @@ class Task:
             if self.is_stepping and not self._may_step(line):
                 return
             self.current_line = line
-            if isinstance(msg, emc.EMC_TRAJ_DELAY):
-                if not self._is_motion_done():
-                    return
-                self.delay_until = now + msg.delay
-            elif isinstance(msg, emc.EMC_TASK_PLAN_PAUSE | emc.EMC_TASK_PLAN_OPTIONAL_STOP):
-                if not self._is_motion_done():
-                    return
-                if isinstance(msg, emc.EMC_TASK_PLAN_PAUSE) or self.is_optional_stop:
-                    self.is_paused = True
-            elif isinstance(msg, emc.EMC_TASK_PLAN_END):
-                if not self._is_everything_done():
-                    return
-                self.is_reading_done = True
-            elif isinstance(msg, emc.EMC_TRAJ_SET_G5X | emc.EMC_TRAJ_SET_G92):
-                pass  # offsets are task's: EMC_STAT shows them from the interpreter's parameters
-            elif isinstance(msg, emc.EMC_TRAJ_SET_ROTATION):
-                self.stat.task.rotation_xy = msg.rotation
-            elif isinstance(msg, emc.EMC_TRAJ_SET_OFFSET):
-                if not self._is_everything_done() or self._send_motion(msg):
-                    return
-                # the applied tool length offset (G43/G49), in step with the program
-                self.stat.task.toolOffset = msg.offset
-            elif isinstance(msg, emc.EMC_AUX_INPUT_WAIT):
-                if not self._is_motion_done() or not self._is_input_wait_over(msg, now):
-                    return
-            elif isinstance(msg, emc.EMC_SYSTEM_CMD):
-                if not self._is_everything_done() or not self._start_system_command(msg):
-                    return
-            elif msg.KIND is MessageKind.OPERATOR:
-                self._write_error_channel(msg)
-            elif isinstance(msg, emc.EMC_TRAJ_SET_MOTION_ID) and self._stamp_next_move(msg.id):
-                pass  # the move that follows carries the id to motion
-            elif msg.RECEIVER is Receiver.MOTION:  # moves go straight into motion's queue
-                motion = self.stat.motion
-                in_flight = self.last_motion_serial - motion.echo_serial_number
-                if motion.traj.queueFull or in_flight >= MAX_MOTION_IN_FLIGHT:
-                    return
-                if msg.waits_for_motion() and not self._is_everything_done():
-                    return
-                if self._send_motion(msg):
-                    return
-            elif msg.RECEIVER is Receiver.IO:
-                if msg.waits_for_motion() and not self._is_everything_done():
-                    return
-                if self._send_io(msg):
-                    return
-            if self.queue:  # (an error above may have aborted the run and emptied it)
+            step = self.queue_steps.get(type(msg), self._pass_on)
+            if not step(msg, now):
+                return
+            if self.queue:  # (an error in the step may have aborted the run and emptied it)
                 self.queue.popleft()
+
+    def _pass_on(self, msg: emc.NMLmsg, _now: float) -> bool:
+        """A queued message without a step of its own: an operator message goes to the
+        error channel, a command to its declared receiver (moves straight into motion's
+        queue while it has room; a queue buster once all before it is done)."""
+        if msg.KIND is MessageKind.OPERATOR:
+            self._write_error_channel(msg)
+            return True
+        if msg.RECEIVER is Receiver.MOTION:
+            motion = self.stat.motion
+            in_flight = self.last_motion_serial - motion.echo_serial_number
+            if motion.traj.queueFull or in_flight >= MAX_MOTION_IN_FLIGHT:
+                return False
+            if msg.waits_for_motion() and not self._is_everything_done():
+                return False
+            return not self._send_motion(msg)
+        if msg.RECEIVER is Receiver.IO:
+            if msg.waits_for_motion() and not self._is_everything_done():
+                return False
+            return not self._send_io(msg)
+        return True
+
+    @handler(emc.EMC_TRAJ_DELAY, table=QUEUE)
+    def _delay(self, msg: emc.EMC_TRAJ_DELAY, now: float) -> bool:
+        if not self._is_motion_done():
+            return False
+        self.delay_until = now + msg.delay
+        return True
+
+    @handler(emc.EMC_TASK_PLAN_PAUSE, emc.EMC_TASK_PLAN_OPTIONAL_STOP, table=QUEUE)
+    def _program_pause(self, msg: emc.NMLmsg, _now: float) -> bool:
+        """M0, and M1 with the optional stop on: pause once motion is at rest."""
+        if not self._is_motion_done():
+            return False
+        if isinstance(msg, emc.EMC_TASK_PLAN_PAUSE) or self.is_optional_stop:
+            self.is_paused = True
+        return True
+
+    @handler(emc.EMC_TASK_PLAN_END, table=QUEUE)
+    def _program_end(self, _msg: emc.NMLmsg, _now: float) -> bool:
+        if not self._is_everything_done():
+            return False
+        self.is_reading_done = True
+        return True
+
+    @handler(emc.EMC_TRAJ_SET_G5X, emc.EMC_TRAJ_SET_G92, table=QUEUE)
+    def _origin(self, _msg: emc.NMLmsg, _now: float) -> bool:
+        return True  # offsets are task's: EMC_STAT shows them from the interpreter's parameters
+
+    @handler(emc.EMC_TRAJ_SET_ROTATION, table=QUEUE)
+    def _rotation(self, msg: emc.EMC_TRAJ_SET_ROTATION, _now: float) -> bool:
+        self.stat.task.rotation_xy = msg.rotation
+        return True
+
+    @handler(emc.EMC_TRAJ_SET_OFFSET, table=QUEUE)
+    def _tool_offset(self, msg: emc.EMC_TRAJ_SET_OFFSET, _now: float) -> bool:
+        if not self._is_everything_done() or self._send_motion(msg):
+            return False
+        # the applied tool length offset (G43/G49), in step with the program
+        self.stat.task.toolOffset = msg.offset
+        return True
+
+    @handler(emc.EMC_AUX_INPUT_WAIT, table=QUEUE)
+    def _input_wait(self, msg: emc.EMC_AUX_INPUT_WAIT, now: float) -> bool:
+        return self._is_motion_done() and self._is_input_wait_over(msg, now)
+
+    @handler(emc.EMC_SYSTEM_CMD, table=QUEUE)
+    def _system_command(self, msg: emc.EMC_SYSTEM_CMD, _now: float) -> bool:
+        return self._is_everything_done() and self._start_system_command(msg)
+
+    @handler(emc.EMC_TRAJ_SET_MOTION_ID, table=QUEUE)
+    def _motion_id(self, msg: emc.EMC_TRAJ_SET_MOTION_ID, now: float) -> bool:
+        # the move that follows carries the id to motion; else motion takes it itself
+        return self._stamp_next_move(msg.id) or self._pass_on(msg, now)
 
     def _is_input_wait_over(self, msg: emc.EMC_AUX_INPUT_WAIT, now: float) -> bool:
         """M66 (and emccanon.WAIT): wait, as LinuxCNC's task, until the digital input is
