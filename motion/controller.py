@@ -823,27 +823,28 @@ class MotionController(SpindleControl, JogWheels, StatusFilling):
         else:
             self._pending_aouts.append((cmd.index, cmd.start))
 
-    @handler(
-        emc.EMC_TRAJ_SET_OFFSET,
-        emc.EMC_TRAJ_SET_FO_ENABLE,
-        emc.EMC_TRAJ_SET_SO_ENABLE,
-        emc.EMC_TRAJ_SET_FH_ENABLE,
-        emc.EMC_MOTION_ADAPTIVE,
-    )
-    def _settings(self, cmd: emc.NMLmsg) -> None:
-        """Settings kept for status and later moves: tool offset, override enables."""
-        if isinstance(cmd, emc.EMC_TRAJ_SET_OFFSET):
-            self.tool_offset = cmd.offset.pose()
-        elif isinstance(cmd, emc.EMC_TRAJ_SET_FO_ENABLE):
-            self.is_feed_override_enabled = bool(cmd.mode)
-        elif isinstance(cmd, emc.EMC_TRAJ_SET_FH_ENABLE):
-            self.is_feed_hold_enabled = bool(cmd.mode)
-        elif isinstance(cmd, emc.EMC_TRAJ_SET_SO_ENABLE):
-            if not 0 <= cmd.spindle < len(self.spindles):
-                raise Refused(f"spindle {cmd.spindle} does not exist")
-            self.spindles[cmd.spindle].is_override_enabled = bool(cmd.mode)
-        elif isinstance(cmd, emc.EMC_MOTION_ADAPTIVE):
-            self.is_adaptive_feed_enabled = bool(cmd.status)
+    # settings kept for status and later moves: tool offset, override enables
+    @handler(emc.EMC_TRAJ_SET_OFFSET)
+    def _tool_offset(self, cmd: emc.EMC_TRAJ_SET_OFFSET) -> None:
+        self.tool_offset = cmd.offset.pose()
+
+    @handler(emc.EMC_TRAJ_SET_FO_ENABLE)
+    def _feed_override_enable(self, cmd: emc.EMC_TRAJ_SET_FO_ENABLE) -> None:
+        self.is_feed_override_enabled = bool(cmd.mode)
+
+    @handler(emc.EMC_TRAJ_SET_FH_ENABLE)
+    def _feed_hold_enable(self, cmd: emc.EMC_TRAJ_SET_FH_ENABLE) -> None:
+        self.is_feed_hold_enabled = bool(cmd.mode)
+
+    @handler(emc.EMC_TRAJ_SET_SO_ENABLE)
+    def _spindle_override_enable(self, cmd: emc.EMC_TRAJ_SET_SO_ENABLE) -> None:
+        if not 0 <= cmd.spindle < len(self.spindles):
+            raise Refused(f"spindle {cmd.spindle} does not exist")
+        self.spindles[cmd.spindle].is_override_enabled = bool(cmd.mode)
+
+    @handler(emc.EMC_MOTION_ADAPTIVE)
+    def _adaptive_feed_enable(self, cmd: emc.EMC_MOTION_ADAPTIVE) -> None:
+        self.is_adaptive_feed_enabled = bool(cmd.status)
 
     @handler(emc.EMC_TRAJ_RIGID_TAP)
     def _rigid_tap(self, cmd: emc.EMC_TRAJ_RIGID_TAP) -> None:
