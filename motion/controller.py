@@ -12,8 +12,9 @@ trajectory planner and the kinematics, and follows LinuxCNC's position flow (MOT
 
 Its parts, one concern each: ``motion/spindle.py`` (spindle commands, pins and feedback,
 MOT-065), ``motion/wheels.py`` (MPG wheels and the jog-stop inputs), ``motion/status.py``
-(EMC_MOTION_STAT filled every period), ``motion/teleop.py`` (the teleop planners) and
-``motion/modes.py`` (FREE, COORD, TELEOP).
+(EMC_MOTION_STAT filled every period), ``motion/teleop.py`` (teleop mode: its planners,
+the teleop vector command and each teleop period) and ``motion/modes.py`` (FREE, COORD,
+TELEOP).
 
 Commands are NML messages (``nml.emc``), each carried out by the ``@handler`` method that
 names it (``nml/commands.py``); ``handle(cmd)`` returns ``None`` when the command was
@@ -24,7 +25,6 @@ limits, planner errors) are queued in ``errors`` for the caller to report.
 
 from __future__ import annotations
 
-import itertools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -41,7 +41,7 @@ from motion.kinematics import Kinematics, KinematicsError, KinematicsType
 from motion.modes import COORD, FREE, TELEOP
 from motion.spindle import OrientState, Spindle, SpindleControl, SpindleInputs
 from motion.status import QUEUE_FULL_MARGIN, MotionStatusRuns, StatusFilling
-from motion.teleop import Fit, JointLimiter, JointLimits, TeleopPlanner
+from motion.teleop import JointLimiter, TeleopControl, TeleopPlanner
 from motion.tp import TermCond, TrajectoryPlanner
 from motion.tp.planner import ProbeType
 from motion.wheels import JogWheels, WheelInputs
@@ -94,7 +94,7 @@ class JogLease:
     periods_left: int = -1  # set by the first check of an unleased jog
 
 
-class MotionController(SpindleControl, JogWheels, StatusFilling):
+class MotionController(SpindleControl, JogWheels, TeleopControl, StatusFilling):
     def __init__(
         self,
         kinematics: Kinematics,
@@ -372,110 +372,6 @@ class MotionController(SpindleControl, JogWheels, StatusFilling):
 
     def _has_axis(self, index: int) -> bool:
         return bool(getattr(self.kins, "axis_mask", 0b111) >> index & 1)
-
-    # ---------------------------------------------------------------- teleop (MOT-016)
-    @handler(emc.EMC_TRAJ_SET_TELEOP_VECTOR)
-    def _teleop_vector(self, cmd: emc.EMC_TRAJ_SET_TELEOP_VECTOR) -> None:
-        """SET_TELEOP_VECTOR (MOT-055): the cartesian velocity teleop mode follows, on top
-        of any axis jogs; a zero vector brings it to a coordinated stop."""
-        if self.mode != TELEOP:
-            raise Refused("teleop vector needs teleop mode")
-        if not self.is_enabled:
-            raise Refused("teleop vector needs motion enabled")
-        vector = cmd.vector.values()
-        if any(vector) and self.is_jog_inhibited:
-            raise Refused("jogging is inhibited (motion.jog-inhibit)")
-        for index, value in enumerate(vector):
-            if value and not self._has_axis(index):
-                raise Refused(f"axis {AXIS_LETTERS[index]} is not used by this machine")
-        self.teleop.set_velocity(vector)
-
-    def _reset_teleop(self) -> None:
-        """Teleop at rest where the pose is (entering teleop MOT-027, motion off)."""
-        pose = self.eoffsets.remove(self.carte_pos_cmd)  # (hook: without external offsets)
-        for planner, value in zip(self.axis_planners, pose, strict=True):
-            planner.reset(value)
-        self.teleop.reset(pose)
-        joints = [j.pos_cmd for j in self.kins_joints]
-        if pose != list(self.carte_pos_cmd):  # (external offsets held: joints without them)
-            joints = self.kins.inverse(Pose(*pose))
-        self.joint_limiter.reset(joints)
-
-    def _stop_teleop(self) -> None:
-        """ABORT or jog-stop in teleop (MOT-021): the jogs' velocities join the vector's,
-        and the vector planner brings the sum to zero along a straight line in velocity
-        space, so all axes stop together within the axis and joint limits."""
-        jogs = self.axis_planners
-        self.teleop.vel = self.teleop.vel + np.array([p.vel for p in jogs])
-        self.teleop.abort()
-        for planner in jogs:
-            planner.reset(planner.pos)
-
-    def _is_teleop_moving(self) -> bool:
-        return self.teleop.is_moving or any(p.is_active or p.vel for p in self.axis_planners)
-
-    def _teleop_step(self, dt: float) -> None:
-        """One teleop period: the axis jogs and the teleop vector each plan their own
-        motion; their sum is carried out, slowed as a whole where a joint would exceed its
-        velocity or acceleration limit, and each planner goes on from its share of what
-        was carried out. Every planner's position is the commanded pose's."""
-        jogs, vector = self.axis_planners, self.teleop
-        start = vector.pos.copy()
-        jog_v0 = np.array([p.vel for p in jogs])
-        vector_v0 = vector.vel.copy()
-        jog_end = np.array([p.step(dt) for p in jogs])
-        vector_end = vector.step(dt)
-        jog_v1 = np.array([p.vel for p in jogs])
-        v0, v1 = jog_v0 + vector_v0, jog_v1 + vector.vel
-        end = jog_end + (vector_end - start)
-        if v0.any() or v1.any():
-            # a jog and the vector on one axis: neither planner alone brakes for its limits
-            is_jogging = (jog_v0 != 0) | (jog_v1 != 0)
-            is_vector_moving = (vector_v0 != 0) | (vector.vel != 0)
-            is_braking_planned = not (is_jogging & is_vector_moving).any()
-            limits = self._teleop_limits()
-            try:
-                fit = self.joint_limiter.fit(start, v0, v1, end, limits, dt, is_braking_planned)
-            except KinematicsError as exc:
-                self.fault(f"inverse kinematics failed: {exc}; motion stopped")
-                return
-            end = fit.end
-            if not fit.is_exact:
-                self._follow_fit(fit, jog_v0, jog_v1, vector_v0)
-            # jogs that have come as far as the soft limits let them end there
-            for planner in itertools.compress(jogs, fit.held.tolist()):
-                planner.reset(planner.pos)
-        for planner, value in zip(jogs, end.tolist(), strict=True):
-            planner.pos = value
-            if not planner.is_enabled:
-                planner.target = value
-        vector.pos = end.copy()
-        pose = Pose(*end.tolist())
-        self._set_joints_from_pose(self.eoffsets.add(pose, dt))  # (hook: external offsets)
-        if self.eoffsets.planners:
-            self.joint_limiter.advance(self.kins.inverse(pose))
-        else:
-            self.joint_limiter.advance([j.pos_cmd for j in self.kins_joints])
-
-    def _follow_fit(
-        self, fit: Fit, jog_v0: np.ndarray, jog_v1: np.ndarray, vector_v0: np.ndarray
-    ) -> None:
-        """Each teleop planner's velocity becomes its share of the slowed motion."""
-        jog_vel = fit.velocity(jog_v0, jog_v1)
-        for planner, vel in zip(self.axis_planners, jog_vel.tolist(), strict=True):
-            planner.vel = vel
-        self.teleop.vel = fit.velocity(vector_v0, self.teleop.vel)
-
-    def _teleop_limits(self) -> JointLimits:
-        vector = self.teleop
-        is_overridden = self.is_override_limits
-        return JointLimits(
-            joint_max_vel=np.array([j.planner.max_vel for j in self.joints]),
-            joint_max_acc=np.array([j.planner.max_acc for j in self.joints]),
-            axis_max_acc=vector.max_acc,
-            axis_min=np.full(NUM_AXES, -math.inf) if is_overridden else vector.min_pos,
-            axis_max=np.full(NUM_AXES, math.inf) if is_overridden else vector.max_pos,
-        )
 
     def _inverse_array(self, pose: np.ndarray) -> list[float]:
         return self.kins.inverse(Pose(*pose.tolist()))
