@@ -76,6 +76,19 @@ class Task:
 
 @pytest.fixture
 def machine(procs, tmp_path: Path) -> Iterator[Task]:
+    yield from _machine(procs, tmp_path)
+
+
+@pytest.fixture
+def machine_with_z_offsets(procs, tmp_path: Path, monkeypatch) -> Iterator[Task]:
+    """The machine, with external offsets on Z ([AXIS_Z]OFFSET_AV_RATIO)."""
+    ini = tmp_path / "machine.ini"
+    ini.write_text("[AXIS_Z]\nOFFSET_AV_RATIO = 0.2\n")
+    monkeypatch.setenv("CNC_INI_FILE", str(ini))
+    yield from _machine(procs, tmp_path)
+
+
+def _machine(procs, tmp_path: Path) -> Iterator[Task]:
     task = Task()
     host = procs.python("-m", "hal.rtapi_app", "--no-rt")
     try:
@@ -355,3 +368,22 @@ def test_an_exception_inside_the_controller_turns_motion_off_and_says_so_once(mo
         host.unload_all()
         hal.destroy()
         task.close()
+
+
+def test_the_status_carries_the_external_offsets_task_takes_out(
+    machine_with_z_offsets: Task,
+) -> None:
+    machine = machine_with_z_offsets
+    configure(machine)
+    assert machine.send(emc.EMC_TRAJ_ENABLE()).status == RCS_STATUS.DONE
+    assert machine.send(emc.EMC_JOINT_HOME(joint=-1)).status == RCS_STATUS.DONE
+    machine.wait_for(lambda s: all(s.joint[i].homed for i in range(3)) and s.traj.inpos)
+    coord = emc.EMC_TRAJ_SET_MODE(mode=emc.EMC_TRAJ_MODE_ENUM.COORD)
+    assert machine.send(coord).status == RCS_STATUS.DONE
+    for name, value in (("enable", "1"), ("scale", "0.5"), ("counts", "-8")):
+        assert run_cnc("halcmd", "setp", f"axis.z.eoffset-{name}", value).returncode == 0
+    stat = machine.wait_for(
+        lambda s: s.external_offsets_applied and s.eoffset_pose.tran.z == pytest.approx(-4.0)
+    )
+    assert stat.eoffset_pose.values() == pytest.approx((0, 0, -4.0, 0, 0, 0, 0, 0, 0))
+    assert stat.traj.position.tran.z == pytest.approx(-4.0)  # (with it: task takes it out)
