@@ -502,21 +502,32 @@ class PrintingCanon:
 
     def START_SPINDLE_CLOCKWISE(self, spindle: int) -> None:
         self.emit(f"START_SPINDLE_CLOCKWISE({spindle})")
-        self.spindle_turning[spindle] = STOPPED if self.spindle_speed[spindle] == 0 else CLOCKWISE
+        if self._is_modelled(spindle):
+            self.spindle_turning[spindle] = (
+                STOPPED if self.spindle_speed[spindle] == 0 else CLOCKWISE
+            )
 
     def START_SPINDLE_COUNTERCLOCKWISE(self, spindle: int) -> None:
         self.emit(f"START_SPINDLE_COUNTERCLOCKWISE({spindle})")
-        self.spindle_turning[spindle] = (
-            STOPPED if self.spindle_speed[spindle] == 0 else COUNTERCLOCKWISE
-        )
+        if self._is_modelled(spindle):
+            self.spindle_turning[spindle] = (
+                STOPPED if self.spindle_speed[spindle] == 0 else COUNTERCLOCKWISE
+            )
 
     def SET_SPINDLE_SPEED(self, spindle: int, rpm: float) -> None:
         self.emit(f"SET_SPINDLE_SPEED({spindle}, {rpm:.4f})")
-        self.spindle_speed[spindle] = rpm
+        if self._is_modelled(spindle):
+            self.spindle_speed[spindle] = rpm
 
     def STOP_SPINDLE_TURNING(self, spindle: int) -> None:
         self.emit(f"STOP_SPINDLE_TURNING({spindle})")
-        self.spindle_turning[spindle] = STOPPED
+        if self._is_modelled(spindle):
+            self.spindle_turning[spindle] = STOPPED
+
+    def _is_modelled(self, spindle: int) -> bool:
+        """Whether the world model keeps this spindle (the interpreter checks spindle
+        numbers; a replayed call from canterp may name any)."""
+        return 0 <= spindle < len(self.spindle_speed)
 
     def ORIENT_SPINDLE(self, spindle: int, orientation: float, mode: int) -> None:
         self.emit(f"ORIENT_SPINDLE({spindle}, {orientation:.4f}, {mode})")

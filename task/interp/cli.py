@@ -23,12 +23,15 @@ import sys
 
 from iocontrol.tooltable import ToolTable
 
+from . import canterp
 from .canon import PrintingCanon
+from .canterp import Canterp
 from .errors import INTERP_ENDFILE, INTERP_EXECUTE_FINISH, INTERP_EXIT, INTERP_OK, InterpError
 from .interp import Interpreter
 
 DEFAULT_TOOL_TABLE = "/usr/share/doc/linuxcnc/examples/sample-configs/common/tool.tbl"
 DEFAULT_VAR_FILE = "/etc/emc2/sample-configs/sim/sim.var"
+PLUGIN_DIR = "/usr/lib/linuxcnc"  # where rs274 -p looks for a plug-in named without a path
 USAGE = """Usage: {prog} [-p interp.so] [-t tool.tbl] [-v var-file.var] [-n 0|1|2]
           [-b] [-s] [-g] [input file [output file]]
 
@@ -173,6 +176,7 @@ def interpret_from_file(interp: Interpreter, out: _Out, do_next: int, block_dele
                 return 1
             continue
         if read_status == INTERP_ENDFILE:
+            status = 0  # the end of the file: a success, whatever went wrong before (-n 0)
             break
         if read_status != INTERP_OK and read_status != INTERP_EXECUTE_FINISH:
             _err(out, "File not open\n\n")
@@ -222,8 +226,11 @@ def main(argv: list[str]) -> int:
     go = False
     ini_path = None
     task = 0
+    plugin = None
     for opt, value in opts:
-        if opt == "-t":
+        if opt == "-p":
+            plugin = value
+        elif opt == "-t":
             tool_files.append(value)
         elif opt == "-v":
             var_file = value
@@ -263,7 +270,17 @@ def main(argv: list[str]) -> int:
         os.environ.pop("INI_FILE_NAME", None)
     try:
         status = _run(
-            args, out, tool_files, var_file, block_delete, do_next, go, ini_path, task, print_stack
+            args,
+            out,
+            tool_files,
+            var_file,
+            block_delete,
+            do_next,
+            go,
+            ini_path,
+            task,
+            print_stack,
+            plugin,
         )
         out.flush()
         return status
@@ -285,9 +302,11 @@ def main(argv: list[str]) -> int:
 
 
 def _run(
-    args, out, tool_files, var_file, block_delete, do_next, go, ini_path, task, print_stack
+    args, out, tool_files, var_file, block_delete, do_next, go, ini_path, task, print_stack, plugin
 ) -> int:
     tools = ToolTable()
+    canon = PrintingCanon(out.append, tools, out.flush)
+    custom = _plugin(plugin, canon, out)
     loaded = False
     for name in tool_files:
         loaded = bool(_load_tools(tools, name, out))
@@ -305,8 +324,7 @@ def _run(
             ini = IniFile.load(ini_path)
         except IniError as error:
             _err(out, f"Unable to open inifile:{ini_path}:\n{error}\n")
-    canon = PrintingCanon(out.append, tools, out.flush)
-    interp = Interpreter(canon, parameter_file=var_file, task=task)
+    interp = custom or Interpreter(canon, parameter_file=var_file, task=task)
     if print_stack:
         interp.record_error_stack()
     # rs274 builds its interpreter before it names the INI file, so the predefined
@@ -332,6 +350,24 @@ def _run(
         interp.close()
     interp.exit()
     return status
+
+
+def _plugin(name: str | None, canon: PrintingCanon, out: _Out) -> Canterp | None:
+    """-p: the interpreter plug-in named, found as rs274 finds it (a relative name in
+    LinuxCNC's library folder). The one plug-in LinuxCNC ships, canterp, is ours in Python;
+    for any other the message is rs274's and the built-in interpreter runs."""
+    if name is None:
+        return None
+    path = os.path.join(PLUGIN_DIR, name)
+    if os.path.basename(name) == f"{canterp.NAME}.so":
+        _err(out, f"emcTaskInit: using custom interpreter '{path}'\n")
+        return canterp.Canterp(canon)
+    _err(
+        out,
+        f"emcTaskInit: could not open interpreter '{path}': {path}: "
+        "cannot open shared object file: No such file or directory\n",
+    )
+    return None
 
 
 def _load_tools(tools: ToolTable, name: str, out: _Out) -> bool:
