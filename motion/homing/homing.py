@@ -44,7 +44,7 @@ from dataclasses import dataclass, replace
 
 from motion.joint import Joint
 
-SETTLE_TIME = 0.1  # s a joint stands still before each homing move (LinuxCNC's HOME_DELAY)
+SETTLE_TIME = 0.1  # s a joint stands still before each search move (LinuxCNC's HOME_DELAY)
 
 
 class HomeState(enum.Enum):
@@ -303,7 +303,9 @@ class _JointHoming:
             return self._moving_check()
         if state == HomeState.FINAL_MOVE:
             if not self.is_move_started:
-                if not self._settled(dt):
+                # LinuxCNC 2.9 starts the final move as soon as the joint stands, without
+                # the pause of the other moves: homing in place takes a few periods
+                if joint.planner.is_active:
                     return None
                 self.is_at_final_start = True
                 if self.is_synchronised and not is_group_ready:

@@ -89,6 +89,18 @@ def test_immediate_homing_takes_the_current_position_as_home_offset() -> None:
     assert axis.x == pytest.approx(10.0)  # joint 2 was at x=7, joint 5 is 3 further
 
 
+def test_homing_in_place_ends_within_a_few_periods() -> None:
+    """As in LinuxCNC 2.9, the final move starts without a pause: a UI homing joints one
+    after another (home(0), home(1), home(2)) finds each homing finished before the next."""
+    axes = [Axis(x=0.0), Axis(x=0.0)]
+    homing = Homing([a.joint for a in axes], [HomingConfig(), HomingConfig()])
+    homing.home_joint(0)
+    assert simulate(homing, axes) <= 3
+    homing.home_joint(1)
+    assert simulate(homing, axes) <= 3
+    assert [a.joint.is_homed for a in axes] == [True, True]
+
+
 @pytest.mark.parametrize("start", [50.0, 100.5])  # before the switch, and already on it
 def test_switch_homing_latching_on_the_rising_edge(start: float) -> None:
     axis = Axis(x=start, switch=(100.0, 200.0))
