@@ -63,6 +63,7 @@ USERSPACE_TOOLS = {
     "mb2hal": [sys.executable, "-m", "hal.modbus.mb2hal"],
     "hy_vfd": [sys.executable, "-m", "hal.modbus.hy_vfd"],
     "mqtt-publisher": [sys.executable, "-m", "cnc.bridges.mqtt_publisher"],
+    "xhc-hb04": [sys.executable, "-m", "hal.xhc_hb04"],
     # simulated hardware for the sim configs (not LinuxCNC programs)
     "hm2_sim": [sys.executable, "-m", "hal.hm2.sim"],
     "hy_vfd_sim": [sys.executable, "-m", "hal.modbus.vfd_sim"],
