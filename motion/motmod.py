@@ -63,6 +63,7 @@ class MotionPins(RtComponent):
     probe_input = pin("bit in")
     motion_enabled = pin("bit out")
     in_position = pin("bit out")
+    is_all_homed = pin("bit out")  # every joint is homed (LinuxCNC 2.9's motion.is-all-homed)
     coord_mode = pin("bit out")
     teleop_mode = pin("bit out")
     on_soft_limit = pin("bit out")
@@ -489,11 +490,13 @@ class Motmod:
         motion.distance_to_go = tp.distance_to_go if controller.mode == COORD else 0.0
         is_in_position = controller.is_in_position
         mode, is_jogging = controller.mode, controller.is_jogging
-        state = (is_enabled, is_in_position, mode, is_jogging)
+        is_all_homed = all(joint.is_homed for joint in controller.joints)
+        state = (is_enabled, is_in_position, mode, is_jogging, is_all_homed)
         if is_all or state != self._motion_written:
             self._motion_written = state
             motion.motion_enabled = is_enabled
             motion.in_position = is_in_position
+            motion.is_all_homed = is_all_homed
             motion.coord_mode = mode == COORD
             motion.teleop_mode = mode == TELEOP
             motion.jog_is_active = is_jogging

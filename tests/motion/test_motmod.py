@@ -142,9 +142,11 @@ def settled_pin(name: str, expected: float, timeout: float = 5) -> float:
 def test_enable_home_and_move_through_real_processes(machine: Task) -> None:
     configure(machine)
     assert machine.send(emc.EMC_TRAJ_ENABLE()).status == RCS_STATUS.DONE
+    assert pin("motion.is-all-homed") == 0
     assert machine.send(emc.EMC_JOINT_HOME(joint=-1)).status == RCS_STATUS.DONE
     stat = machine.wait_for(lambda s: all(s.joint[i].homed for i in range(3)) and s.traj.inpos)
     assert stat.traj.enabled
+    assert settled_pin("motion.is-all-homed", 1) == 1  # (LinuxCNC 2.9's pin)
     assert machine.send(emc.EMC_TRAJ_SET_MODE(mode=emc.EMC_TRAJ_MODE_ENUM.COORD)).status == (
         RCS_STATUS.DONE
     )
