@@ -928,7 +928,7 @@ class _Server(socketserver.ThreadingTCPServer):
     allow_reuse_address = True
     daemon_threads = True
 
-    def __init__(self, address: tuple[str, int], shell: RemoteShell, sessions: int) -> None:
+    def __init__(self, address: tuple[str, int], shell: RemoteShell | None, sessions: int) -> None:
         super().__init__(address, _Handler)
         self.shell = shell
         self.max_sessions = sessions
@@ -980,12 +980,14 @@ def main(argv: list[str] | None = None) -> int:
     if ini is not None and not Path(ini).is_file():
         print(f"cnc rsh: no INI file {ini}", file=sys.stderr)
         return 1
-    shell = RemoteShell(ini, options)
+    # Listen first, then attach to the machine: a client that connects meanwhile (a
+    # script starting right after the machine) waits in the queue instead of being refused.
     try:
-        server = _Server(("0.0.0.0", options.port), shell, options.sessions)
+        server = _Server(("0.0.0.0", options.port), None, options.sessions)
     except OSError as exc:
         print(f"cnc rsh: error initializing sockets: {exc.strerror}", file=sys.stderr)
         return 1
+    shell = server.shell = RemoteShell(ini, options)
     shell.on_shutdown = lambda: threading.Thread(target=server.shutdown, daemon=True).start()
     print(f"cnc rsh: listening on port {server.server_address[1]}", file=sys.stderr, flush=True)
     import signal
