@@ -43,7 +43,8 @@ class ToolChanger:
         self.is_preparing = False
         self.is_changing = False
         if self.is_random:
-            self.tool_in_spindle = max(0, table.get(0).toolno)
+            # the tool in pocket 0, as LinuxCNC: -1 when the table has none there
+            self.tool_in_spindle = table.get(0).toolno
         else:
             # a nonrandom changer starts believing the spindle is empty (TOOL-003)
             self.tool_in_spindle = 0

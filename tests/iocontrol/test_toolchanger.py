@@ -92,7 +92,7 @@ def test_random_prepare_of_the_spindle_tool_completes_at_once() -> None:
 
 def test_random_change_into_an_empty_spindle() -> None:
     tc = changer(RANDOM[1:], is_random=True)
-    assert tc.tool_in_spindle == 0
+    assert tc.tool_in_spindle == -1  # no tool in pocket 0, as LinuxCNC reports it
     change_to(tc, 1)
     assert tc.tool_in_spindle == 1
     assert [line.split()[:2] for line in tc.table.format().splitlines()] == [
