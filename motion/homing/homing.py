@@ -156,6 +156,16 @@ class _JointHoming:
             return None
         if cfg.locking_indexer:
             joint.is_unlock_requested = True
+        elif cfg.search_vel == 0 and cfg.latch_vel == 0:
+            # homing in place: the position is known at once; with no final move to make
+            # the joint is homed now (LinuxCNC's zero-length final move takes two periods,
+            # so a UI's next home command finds it done there too)
+            joint.set_position(cfg.home_offset)
+            if math.isclose(joint.pos_cmd, cfg.home, rel_tol=0.0, abs_tol=1e-9):
+                self._finish()
+            else:
+                self._after_latch()
+            return None
         self.state = HomeState.UNLOCK_WAIT
         return None
 
@@ -427,6 +437,11 @@ class Homing:
             if error is not None:
                 self._fail(error)
                 return
+        if all(self._machines[n].state == HomeState.IDLE for n in group):
+            # every joint homed in place at once: on to the next sequence, if any
+            self._group.clear()
+            if self._sequence:
+                self._start_next_sequence()
 
     def _start_next_sequence(self) -> None:
         number = self._sequence.pop(0)

@@ -91,14 +91,20 @@ def test_immediate_homing_takes_the_current_position_as_home_offset() -> None:
 
 def test_homing_in_place_ends_within_a_few_periods() -> None:
     """As in LinuxCNC 2.9, the final move starts without a pause: a UI homing joints one
-    after another (home(0), home(1), home(2)) finds each homing finished before the next."""
+    after another (home(0), home(1), home(2)) finds each homing finished before the next.
+    Without a final move to make (HOME = HOME_OFFSET) it ends with the command."""
     axes = [Axis(x=0.0), Axis(x=0.0)]
     homing = Homing([a.joint for a in axes], [HomingConfig(), HomingConfig()])
     homing.home_joint(0)
-    assert simulate(homing, axes) <= 3
+    assert not homing.is_homing and axes[0].joint.is_homed
     homing.home_joint(1)
-    assert simulate(homing, axes) <= 3
-    assert [a.joint.is_homed for a in axes] == [True, True]
+    assert not homing.is_homing and axes[1].joint.is_homed
+    moving = Axis(x=0.0)
+    homing = one_joint(moving, home=0.001)  # a final move of 1 µm
+    homing.home_joint(0)
+    assert homing.is_homing
+    assert simulate(homing, [moving]) <= 3
+    assert moving.joint.is_homed
 
 
 @pytest.mark.parametrize("start", [50.0, 100.5])  # before the switch, and already on it

@@ -56,6 +56,11 @@ class Task:
         raise AssertionError(f"no answer to {cmd.NAME}")
 
     def wait_for(self, condition, timeout: float = 20) -> emc.EMC_MOTION_STAT:
+        """The status once ``condition`` holds (it may hold already: motion writes its
+        status only when something changes)."""
+        latest = self.task[MOTION_STATUS].peek()
+        if latest is not None and condition(latest):
+            return latest
         deadline = time.monotonic() + timeout
         while time.monotonic() < deadline:
             stat = self.task[MOTION_STATUS].blocking_read(1)
