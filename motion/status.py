@@ -157,8 +157,8 @@ class StatusFilling:
             *self.carte_pos_fb.as_tuple(),  # actualPosition
             self.traj_vel,  # velocity
             self.traj_acc,  # acceleration
-            _finite_or_zero(self.max_vel),  # maxVelocity
-            _finite_or_zero(self.max_acc),  # maxAcceleration
+            _limit_or_unlimited(self.max_vel),  # maxVelocity
+            _limit_or_unlimited(self.max_acc),  # maxAcceleration
             *tp.probe_pos.tolist(),  # probedPosition
             tp.probe_tripped,
             move is not None and move.probe is not None,  # probing
@@ -230,6 +230,13 @@ def _motion_type(move) -> int:
 
 def _finite_or_zero(value: float) -> float:
     return value if math.isfinite(value) else 0.0
+
+
+UNLIMITED = 1e99  # what LinuxCNC reports for a [TRAJ] limit the INI does not set
+
+
+def _limit_or_unlimited(value: float) -> float:
+    return value if math.isfinite(value) else UNLIMITED
 
 
 _ZERO_POSE = (0.0,) * NUM_AXES

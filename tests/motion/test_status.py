@@ -126,3 +126,15 @@ def test_fill_status_leaves_the_fields_motion_does_not_own() -> None:
 def test_a_field_run_is_consecutive_fields_only() -> None:
     with pytest.raises(ValueError, match="not consecutive"):
         FieldRun(emc.EMC_MOTION_STAT().byte_view(), 0, emc.EMC_TRAJ_STAT.dtype, ("mode", "id"))
+
+
+def test_unset_traj_limits_read_as_linuxcnc_unlimited() -> None:
+    """[TRAJ]MAX_LINEAR_VELOCITY/ACCELERATION absent: LinuxCNC reports 1e99 (its test
+    helper waits for both to be non-zero before it trusts the status)."""
+    motion = enabled_homed()
+    motion.max_vel = motion.max_acc = math.inf
+    traj = status(motion).traj
+    assert (traj.maxVelocity, traj.maxAcceleration) == (1e99, 1e99)
+    motion.max_vel, motion.max_acc = 25.0, 300.0
+    traj = status(motion).traj
+    assert (traj.maxVelocity, traj.maxAcceleration) == (25.0, 300.0)
