@@ -1136,6 +1136,10 @@ class Task:
             traj = self.stat.motion.traj
             traj.linearUnits = self.setup.units_per_mm
             traj.angularUnits = self.setup.angular_units
+            # ... and so are the axes' limits (LinuxCNC's emcAxisUpdate, from the INI)
+            for index, axis in self.setup.axes.items():
+                record = self.stat.motion.axis[index]
+                record.minPositionLimit, record.maxPositionLimit = axis.min_limit, axis.max_limit
         if io is not None:
             self.stat.io = io
         return True

@@ -122,6 +122,21 @@ def test_estop_reset_on_home_and_mdi_move(machine: Machine) -> None:
     assert s.task_mode == cnc.MODE_MDI and s.interp_state == cnc.INTERP_IDLE
 
 
+def test_status_shows_the_axes_limits_and_unset_traj_limits_as_unlimited(
+    machine: Machine,
+) -> None:
+    """stat.axis limits come from [AXIS_L] (as LinuxCNC's task fills them); an absent
+    [TRAJ]MAX_LINEAR_ACCELERATION reads 1e99, as in LinuxCNC."""
+    s = machine.stat
+    s.poll()
+    assert [(a["min_position_limit"], a["max_position_limit"]) for a in s.axis[:3]] == [
+        (-100.0, 100.0),
+        (-100.0, 100.0),
+        (-50.0, 50.0),
+    ]
+    assert (s.max_velocity, s.max_acceleration) == (50.0, 1e99)
+
+
 def test_bad_mdi_line_is_an_error_with_the_interpreters_text(machine: Machine) -> None:
     machine.ready_to_move()
     machine.messages(0.1)
