@@ -841,8 +841,9 @@ class MotionController(SpindleControl, JogWheels, TeleopControl, StatusFilling):
                 self.fault(f"joint {index} amplifier fault")
                 return
             if joint.is_on_limit_switch() and not (self.is_override_limits or joint.is_homing):
-                side = "positive" if joint.is_on_pos_limit else "negative"
-                self.fault(f"joint {index} on limit switch error ({side})")
+                # LinuxCNC's words exactly: UIs and scripts match them (the side is
+                # in the status, joint[n]'s min/max_hard_limit)
+                self.fault(f"joint {index} on limit switch error")
                 return
 
     def _check_following_error(self) -> None:

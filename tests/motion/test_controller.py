@@ -240,7 +240,7 @@ def test_hard_limit_switch_disables_motion_unless_overridden() -> None:
     n = 3
     fb = [0.0] * n
     motion.update(Inputs(fb, [False, True, False], [False] * n, [False] * n))
-    assert motion.errors == ["joint 1 on limit switch error (positive)"]
+    assert motion.errors == ["joint 1 on limit switch error"]  # LinuxCNC's words
     assert not motion.is_enabled
 
 
