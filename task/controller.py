@@ -185,7 +185,7 @@ class Task:
         self.is_reading_done = True  # the interpreter has nothing more to read for this run
         self.is_waiting_for_synch = False
         self.is_optional_stop = False
-        self.is_block_delete = False
+        self.is_block_delete = True  # as the canon starts (LinuxCNC's INIT_CANON: ON)
         self.delay_until = 0.0
         self.input_wait: tuple[int, float] | None = None  # an M66 under way: (mode, deadline)
         self.mdi_queue: deque[tuple[int, str]] = deque()

@@ -135,6 +135,7 @@ def test_status_shows_the_axes_limits_and_unset_traj_limits_as_unlimited(
         (-50.0, 50.0),
     ]
     assert (s.max_velocity, s.max_acceleration) == (50.0, 1e99)
+    assert s.block_delete is True  # as the canon starts, in LinuxCNC too
 
 
 def test_bad_mdi_line_is_an_error_with_the_interpreters_text(machine: Machine) -> None:
