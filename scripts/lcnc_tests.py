@@ -15,6 +15,7 @@ through a folder of wrappers put first on ``PATH`` and a module folder on ``PYTH
     rs274 -> cnc rs274           linuxcncrsh -> cnc rsh      realtime -> cnc hal realtime
     python3 -> this Python (its ``import hal`` is ours)   import linuxcnc -> import cnc
     import gcode -> task.interp.python.gcode (LinuxCNC's preview interpreter module)
+    rs274 -p canterp.so -> cnc rs274's canterp (task/interp/canterp.py, in Python)
 
 Tests outside the project's scope (halcompile and C builds, Mesa hm2 hardware, Modbus
 hardware, classicladder, Tk/GTK/Qt GUIs, LinuxCNC's uspace internals) are listed as
