@@ -236,6 +236,11 @@ class Motmod:
         ]
         letters = [AXIS_NAMES[i] for i in range(9) if getattr(kins, "axis_mask", 0b111) >> i & 1]
         self.axes = {AXIS_NAMES.index(c): AxisPins.create(hal, comp, f"axis.{c}") for c in letters}
+        # LinuxCNC 2.9 makes the pins of all nine axes (HAL files connect axis.c.* on an
+        # XYZ machine); those of axes the kinematics lack are made but never serviced
+        self.unused_axes = [
+            AxisPins.create(hal, comp, f"axis.{c}") for c in AXIS_NAMES if c not in letters
+        ]
         self.spindles = [
             SpindlePins.create(hal, comp, f"spindle.{i}") for i in range(options["num_spindles"])
         ]

@@ -394,3 +394,11 @@ def test_the_status_carries_the_external_offsets_task_takes_out(
     )
     assert stat.eoffset_pose.values() == pytest.approx((0, 0, -4.0, 0, 0, 0, 0, 0, 0))
     assert stat.traj.position.tran.z == pytest.approx(-4.0)  # (with it: task takes it out)
+
+
+def test_every_axis_has_its_pins_as_in_linuxcnc(machine: Task) -> None:
+    """An XYZ machine still has axis.a.* ... axis.w.* (LinuxCNC 2.9 makes all nine; HAL
+    files such as xhc-hb04.tcl set them), idle."""
+    for letter in "abcuvw":
+        assert pin(f"axis.{letter}.jog-accel-fraction") == 1.0
+        assert pin(f"axis.{letter}.pos-cmd") == 0.0
