@@ -157,13 +157,12 @@ class ToolChanger:
         """EMC_TOOL_SET_NUMBER (M61): the record at ``index`` is now in the spindle, without
         a handshake (IO-012, TOOL-027). Like LinuxCNC 2.9, the command carries the index."""
         self._check_index(index)
-        source = self.table.get(index)
         self.load_tool(index)
         self.tool_in_spindle = max(0, self.table.get(0).toolno)
+        # as LinuxCNC's iocontrol: tool-from-pocket only changes to 0 for an empty spindle
+        # (it keeps the pocket of the last handshake change otherwise)
         if self.tool_in_spindle == 0:
             self.tool_from_pocket = 0
-        else:
-            self.tool_from_pocket = index if self.is_random else source.pocketno
 
     def unload(self) -> None:
         """EMC_TOOL_UNLOAD: the spindle is empty (IO-013)."""

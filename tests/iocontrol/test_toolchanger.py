@@ -121,8 +121,11 @@ def test_cancel_drops_a_pending_handshake() -> None:
 
 def test_set_number_loads_without_handshake() -> None:
     tc = changer(NONRANDOM)
+    change_to(tc, 1)
+    assert tc.tool_from_pocket == 1
     tc.set_number(3)  # M61 Q3: the interpreter sends the tooldata index
-    assert (tc.tool_in_spindle, tc.tool_from_pocket, tc.spindle().toolno) == (3, 4, 3)
+    # tool-from-pocket is the last handshake change's, as in LinuxCNC (test toolchanger/m61)
+    assert (tc.tool_in_spindle, tc.tool_from_pocket, tc.spindle().toolno) == (3, 1, 3)
     assert not tc.is_pending
     tc.set_number(0)
     assert (tc.tool_in_spindle, tc.tool_from_pocket) == (0, 0)
