@@ -1140,6 +1140,12 @@ class Task:
             for index, axis in self.setup.axes.items():
                 record = self.stat.motion.axis[index]
                 record.minPositionLimit, record.maxPositionLimit = axis.min_limit, axis.max_limit
+            # ... and the joints' types and units (LinuxCNC's emcJointUpdate)
+            for joint, record in zip(self.setup.joints, self.stat.motion.joint, strict=False):
+                if joint.is_angular:
+                    record.jointType, record.units = emc.EmcJointType.ANGULAR, traj.angularUnits
+                else:
+                    record.jointType, record.units = emc.EmcJointType.LINEAR, traj.linearUnits
         if io is not None:
             self.stat.io = io
         return True

@@ -48,6 +48,7 @@ class JointSetup:
     home_absolute_encoder: int
     volatile_home: bool
     locking_indexer: bool
+    is_angular: bool = False  # [JOINT_n]TYPE = ANGULAR
 
     @classmethod
     def from_config(cls, config: MachineConfig, index: int) -> JointSetup:
@@ -55,6 +56,7 @@ class JointSetup:
             return config.value(f"JOINT_{index}", key)
 
         return cls(
+            is_angular=value("TYPE") == "ANGULAR",
             min_limit=value("MIN_LIMIT"),
             max_limit=value("MAX_LIMIT"),
             max_vel=value("MAX_VELOCITY"),

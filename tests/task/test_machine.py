@@ -122,7 +122,7 @@ def test_estop_reset_on_home_and_mdi_move(machine: Machine) -> None:
     assert s.task_mode == cnc.MODE_MDI and s.interp_state == cnc.INTERP_IDLE
 
 
-def test_status_shows_the_axes_limits_and_unset_traj_limits_as_unlimited(
+def test_status_shows_ini_limits_joint_types_and_unset_traj_limits_as_unlimited(
     machine: Machine,
 ) -> None:
     """stat.axis limits come from [AXIS_L] (as LinuxCNC's task fills them); an absent
@@ -136,6 +136,7 @@ def test_status_shows_the_axes_limits_and_unset_traj_limits_as_unlimited(
     ]
     assert (s.max_velocity, s.max_acceleration) == (50.0, 1e99)
     assert s.block_delete is True  # as the canon starts, in LinuxCNC too
+    assert [(j["jointType"], j["units"]) for j in s.joint[:3]] == [(cnc.LINEAR, 1.0)] * 3
 
 
 def test_bad_mdi_line_is_an_error_with_the_interpreters_text(machine: Machine) -> None:
