@@ -410,6 +410,10 @@ class OWordMixin:
                 self.skipping_o = block.o_name
                 self.skipping_start = self.sequence_number
         elif otype == O_while:  # the 'while' of a do/while
+            # a 'continue' of this do loop ends here. LinuxCNC 2.9 leaves the flag set, and a
+            # later repeat/while loop (of this program or the next) runs again at its end:
+            # a pocket's 'repeat [2]' cut four passes (tests/interp/linuxcnc/DEVIATIONS.txt)
+            self.doing_continue = 0
             if self.test_value != 0.0 and not self.doing_break:
                 self.control_back_to(block)
             else:

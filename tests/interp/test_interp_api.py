@@ -250,3 +250,33 @@ def test_error_stack_names_are_cut_at_79_characters(tmp_path) -> None:
     )
     assert all(len(name) <= 79 for name in info.value.stack)
     assert info.value.stack[-1] == "int Interp::_execute(const char*)"
+
+
+def run_to_end(interp: Interpreter, path) -> None:  # type: ignore[no-untyped-def]
+    interp.open(str(path))
+    while interp.read() != INTERP_ENDFILE:
+        if interp.execute() == INTERP_EXIT:
+            break
+    interp.close()
+
+
+def test_a_continue_in_a_do_loop_leaves_later_loops_alone(tmp_path) -> None:
+    """A deliberate deviation from LinuxCNC 2.9 (tests/interp/linuxcnc/DEVIATIONS.txt):
+    its 'continue' flag outlives a do/while loop, and the next repeat loop, in this program
+    or the next one task runs, went round twice as often (a pocket cut to twice its depth)."""
+    do_loop = tmp_path / "do.ngc"
+    do_loop.write_text(
+        "#<n> = 0\no600 do\n#<n> = [#<n> + 1]\no610 if [#<n> EQ 2]\no600 continue\n"
+        "o610 endif\no600 while [#<n> LT 3]\nM2\n"
+    )
+    passes = tmp_path / "passes.ngc"
+    passes.write_text("G1 X5 F100\no10 repeat [2]\nG1 X0\nG1 X1\no10 endrepeat\nM2\n")
+    out = io.StringIO()
+    interp = Interpreter(
+        PrintingCanon(out.write, ToolTable()), parameter_file=str(tmp_path / "p.var")
+    )
+    interp.init()
+    for program in (do_loop, passes):
+        run_to_end(interp, program)
+    feeds = [line for line in out.getvalue().splitlines() if "STRAIGHT_FEED" in line]
+    assert len(feeds) == 1 + 2 * 2  # the lead-in, then two passes of two moves
