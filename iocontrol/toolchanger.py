@@ -23,9 +23,9 @@ class ToolChangeError(Exception):
     """A tool command that cannot be carried out; the text is for the operator."""
 
 
-def empty_spindle(toolno: int) -> ToolEntry:
-    """The spindle record when no tool is in it (toolno -1 at start-up, 0 after T0 M6)."""
-    return ToolEntry(toolno=toolno, pocketno=0)
+def empty_spindle() -> ToolEntry:
+    """The spindle record after a nonrandom changer unloads it (T0 M6)."""
+    return ToolEntry(toolno=0, pocketno=0)
 
 
 class ToolChanger:
@@ -46,9 +46,11 @@ class ToolChanger:
             # the tool in pocket 0, as LinuxCNC: -1 when the table has none there
             self.tool_in_spindle = table.get(0).toolno
         else:
-            # a nonrandom changer starts believing the spindle is empty (TOOL-003)
+            # a nonrandom changer starts believing the spindle is empty (TOOL-003); its
+            # record is the cleared one LinuxCNC's table load leaves (tool -1, pocket -1),
+            # so that #<_current_pocket> reads -1 until the first tool change
             self.tool_in_spindle = 0
-            table.put(0, empty_spindle(-1))
+            table.put(0, ToolEntry())
 
     # ------------------------------------------------------------------ queries
     @property
@@ -137,7 +139,7 @@ class ToolChanger:
             self.table.put(index, in_spindle)
             self.table.put(0, in_pocket)
         elif index == 0:
-            self.table.put(0, empty_spindle(0))
+            self.table.put(0, empty_spindle())
         else:
             self.table.put(0, self.table.get(index))
 
@@ -169,7 +171,7 @@ class ToolChanger:
         self.tool_in_spindle = 0
         self.tool_from_pocket = 0
         if not self.is_random:
-            self.table.put(0, empty_spindle(0))
+            self.table.put(0, empty_spindle())
 
     # ------------------------------------------------------------------ table edits
     def set_offset(

@@ -28,6 +28,8 @@ def change_to(tc: ToolChanger, toolno: int) -> None:
 def test_nonrandom_starts_with_an_empty_spindle() -> None:
     tc = changer(NONRANDOM)
     assert (tc.tool_in_spindle, tc.pocket_prepped, tc.spindle().toolno) == (0, NO_POCKET, -1)
+    # the cleared record LinuxCNC's table load leaves: #<_current_pocket> reads -1
+    assert tc.spindle().pocketno == -1
 
 
 def test_prepare_sets_pins_and_waits_for_prepared() -> None:
