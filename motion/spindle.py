@@ -41,6 +41,11 @@ class Spindle:
     increasing: int = 0  # 1 after EMC_SPINDLE_INCREASE, -1 after DECREASE
     is_brake_on: bool = True
     is_override_enabled: bool = True
+    # [SPINDLE_n] speed limits (rpm, positive): a commanded speed is clamped into them
+    max_forward: float = math.inf
+    min_forward: float = 0.0
+    max_reverse: float = math.inf
+    min_reverse: float = 0.0
     # M19: the orient pins and the cycle's state
     is_orienting: bool = False
     orient_angle: float = 0.0
@@ -56,6 +61,14 @@ class Spindle:
     # periods during which at-speed is taken as false after a speed change: the pin
     # still tells about the old speed until the drive has seen the new one
     settle_periods: int = 0
+
+    def clamp_speed(self) -> None:
+        """Keep a commanded speed within the [SPINDLE_n] limits of its direction (0 is
+        stop, never clamped), as LinuxCNC's motion does for each new speed."""
+        if self.speed > 0:
+            self.speed = min(max(self.speed, self.min_forward), self.max_forward)
+        elif self.speed < 0:
+            self.speed = -min(max(-self.speed, self.min_reverse), self.max_reverse)
 
     def stop_orienting(self) -> None:
         """M3, M4, M5 end any orient cycle and unlock the spindle."""
@@ -101,12 +114,23 @@ class SpindleControl:
         spindle.settle_periods = AT_SPEED_SETTLE_PERIODS
         return spindle
 
+    @handler(emc.EMC_SPINDLE_SET_PARAMS)
+    def _spindle_set_params(self, cmd: emc.EMC_SPINDLE_SET_PARAMS) -> None:
+        """The [SPINDLE_n] speed limits, sent by task at start-up."""
+        spindle = self._spindle_of(cmd)
+        limits = (cmd.max_forward, cmd.min_forward, cmd.max_reverse, cmd.min_reverse)
+        if not all(limit >= 0 for limit in limits):  # (NaN too)
+            raise Refused(f"spindle {cmd.spindle}: speed limits must be >= 0, got {limits}")
+        spindle.max_forward, spindle.min_forward = cmd.max_forward, cmd.min_forward
+        spindle.max_reverse, spindle.min_reverse = cmd.max_reverse, cmd.min_reverse
+
     @handler(emc.EMC_SPINDLE_ON)
     def _spindle_on(self, cmd: emc.EMC_SPINDLE_ON) -> None:
         """M3/M4 (G96: the CSS factor)."""
         spindle = self._spindle_of(cmd)
         spindle.stop_orienting()
         spindle.speed = cmd.speed
+        spindle.clamp_speed()
         spindle.css_factor, spindle.css_xoffset = cmd.factor, cmd.xoffset
         spindle.is_brake_on = False
         if cmd.wait_for_spindle_at_speed:
@@ -126,6 +150,7 @@ class SpindleControl:
         spindle = self._spindle_of(cmd)
         sign = -1.0 if spindle.speed < 0 else 1.0
         spindle.speed = sign * abs(cmd.speed) if spindle.speed else 0.0
+        spindle.clamp_speed()
         spindle.css_factor = math.copysign(cmd.factor, sign) if spindle.speed else 0.0
         spindle.css_xoffset = cmd.xoffset
         if spindle.speed:  # feed moves wait for the new speed (motion(9) at-speed)
@@ -141,6 +166,7 @@ class SpindleControl:
             step = -min(step, abs(spindle.speed))
             spindle.increasing = -1
         spindle.speed += step if spindle.speed >= 0 else -step
+        spindle.clamp_speed()
 
     @handler(emc.EMC_SPINDLE_BRAKE_ENGAGE)
     def _spindle_brake_engage(self, cmd: emc.EMC_SPINDLE_BRAKE_ENGAGE) -> None:

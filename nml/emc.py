@@ -884,6 +884,17 @@ class EMC_SPINDLE_CMD_MSG(RCS_CMD_MSG, receiver=Receiver.MOTION):
     spindle: i32
 
 
+class EMC_SPINDLE_SET_PARAMS(EMC_SPINDLE_CMD_MSG, type_id=1301):
+    """The speed limits of one spindle, from [SPINDLE_n] via task (rpm, all positive).
+    LinuxCNC 2.9 passes them through motion's shared memory (EMCMOT_SET_SPINDLE_PARAMS);
+    here it is an NML message, numbered in the free start of the spindle group."""
+
+    max_forward: f64
+    min_forward: f64
+    max_reverse: f64
+    min_reverse: f64
+
+
 class EMC_SPINDLE_ON(EMC_SPINDLE_CMD_MSG, type_id=1304, waits_for_motion=True):
     speed: f64  # rpm, or the maximum rpm in constant surface speed mode
     factor: f64  # constant surface speed numerator; 0 for a fixed rpm

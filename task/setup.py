@@ -163,6 +163,17 @@ class MachineSetup:
                 emc.EMC_AXIS_SET_MAX_VELOCITY(axis=index, vel=axis.max_vel),
                 emc.EMC_AXIS_SET_MAX_ACCELERATION(axis=index, acc=axis.max_acc),
             ]
+        for index in range(self.config.value("TRAJ", "SPINDLES")):
+            section = f"SPINDLE_{index}"  # (the reverse limits default to the forward ones)
+            out.append(
+                emc.EMC_SPINDLE_SET_PARAMS(
+                    spindle=index,
+                    max_forward=self.config.value(section, "MAX_FORWARD_VELOCITY"),
+                    min_forward=self.config.value(section, "MIN_FORWARD_VELOCITY"),
+                    max_reverse=self.config.value(section, "MAX_REVERSE_VELOCITY"),
+                    min_reverse=self.config.value(section, "MIN_REVERSE_VELOCITY"),
+                )
+            )
         # LinuxCNC sends 1e99 when the INI file has none ("the axes' limits apply"); ours
         # says nothing then, and motion keeps the axes' limits
         if self.config.is_set("TRAJ", "MAX_LINEAR_VELOCITY"):

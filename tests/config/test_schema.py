@@ -360,6 +360,30 @@ def test_task_tells_motion_every_joint_key_with_linuxcncs_defaults(tmp_path: Pat
     assert (setup.cycle_time, setup.parameter_file) == (0.01, str(tmp_path / "sim.var"))
 
 
+def test_task_tells_motion_the_spindle_limits_reverse_defaulting_to_forward(
+    tmp_path: Path,
+) -> None:
+    """As LinuxCNC's tests/spindle_limits: a missing reverse limit is the forward one."""
+    from nml import emc
+    from task.setup import load_setup
+
+    path = machine(
+        tmp_path,
+        TRAJ__SPINDLES="2",
+        SPINDLE_0__MAX_FORWARD_VELOCITY="2000",
+        SPINDLE_0__MIN_FORWARD_VELOCITY="200",
+        SPINDLE_0__MAX_REVERSE_VELOCITY="2500",
+    )
+    setup = load_setup(IniFile.load(path))
+    sent = [m for m in setup.motion_init_messages() if type(m) is emc.EMC_SPINDLE_SET_PARAMS]
+    assert [m.spindle for m in sent] == [0, 1]
+    first, second = sent
+    limits = (first.max_forward, first.min_forward, first.max_reverse, first.min_reverse)
+    assert limits == (2000.0, 200.0, 2500.0, 200.0)
+    assert (second.min_forward, second.min_reverse) == (0.0, 0.0)
+    assert second.max_reverse == second.max_forward >= 1e9  # no limit
+
+
 def test_task_refuses_a_bad_parameter_file_before_reading_it(tmp_path: Path) -> None:
     from task.setup import load_setup
 

@@ -292,3 +292,51 @@ def test_in_css_mode_a_feed_after_a_rapid_waits_for_at_speed() -> None:
     spindle.is_at_speed_forced = True
     run_until_done(motion, spindle)
     assert motion.carte_pos_cmd.x == pytest.approx(10.0)
+
+
+@pytest.mark.parametrize(
+    ("command", "expected"),
+    [
+        (emc.EMC_SPINDLE_ON(spindle=0, speed=10.0), 100.0),  # up to MIN_FORWARD
+        (emc.EMC_SPINDLE_ON(spindle=0, speed=10_000.0), 1000.0),  # down to MAX_FORWARD
+        (emc.EMC_SPINDLE_ON(spindle=0, speed=-10.0), -500.0),  # MIN_REVERSE
+        (emc.EMC_SPINDLE_ON(spindle=0, speed=-10_000.0), -1500.0),  # MAX_REVERSE
+        (emc.EMC_SPINDLE_ON(spindle=0, speed=700.0), 700.0),
+        (emc.EMC_SPINDLE_ON(spindle=0, speed=0.0), 0.0),  # stopped is never clamped
+    ],
+)
+def test_a_commanded_speed_is_clamped_to_the_spindle_limits(
+    command: emc.EMC_SPINDLE_ON, expected: float
+) -> None:
+    """[SPINDLE_0] of LinuxCNC's tests/spindle_limits: 100..1000 forward, 500..1500 reverse."""
+    motion = enabled_homed()
+    limits = emc.EMC_SPINDLE_SET_PARAMS(
+        spindle=0, max_forward=1000.0, min_forward=100.0, max_reverse=1500.0, min_reverse=500.0
+    )
+    ok(motion, limits)
+    ok(motion, command)
+    assert motion.spindles[0].speed == expected
+
+
+def test_s_word_and_increase_stay_within_the_spindle_limits() -> None:
+    motion = enabled_homed()
+    limits = emc.EMC_SPINDLE_SET_PARAMS(
+        spindle=0, max_forward=1000.0, min_forward=100.0, max_reverse=1500.0, min_reverse=500.0
+    )
+    ok(motion, limits)
+    ok(motion, emc.EMC_SPINDLE_ON(spindle=0, speed=-600.0))
+    ok(motion, emc.EMC_SPINDLE_SPEED(spindle=0, speed=20.0))
+    assert motion.spindles[0].speed == -500.0
+    ok(motion, emc.EMC_SPINDLE_ON(spindle=0, speed=950.0))
+    ok(motion, emc.EMC_SPINDLE_INCREASE(spindle=0, speed=100.0))
+    assert motion.spindles[0].speed == 1000.0
+
+
+def test_negative_spindle_limits_are_refused() -> None:
+    motion = enabled_homed()
+    bad = emc.EMC_SPINDLE_SET_PARAMS(
+        spindle=0, max_forward=1000.0, min_forward=-1.0, max_reverse=1.0, min_reverse=0.0
+    )
+    assert "speed limits must be >= 0" in str(motion.handle(bad))
+    ok(motion, emc.EMC_SPINDLE_ON(spindle=0, speed=-5.0))
+    assert motion.spindles[0].speed == -5.0  # the defaults still apply: no limits

@@ -277,6 +277,7 @@ OUR_TYPES = {
     "EMC_AXIS_SET_MAX_POSITION_LIMIT": 142,
     "EMC_AXIS_SET_MAX_VELOCITY": 143,
     "EMC_AXIS_SET_MAX_ACCELERATION": 144,
+    "EMC_SPINDLE_SET_PARAMS": 1301,
     # LinuxCNC 2.7's number (2.9 dropped the message): teleop's velocity vector (MOT-055)
     "EMC_TRAJ_SET_TELEOP_VECTOR": 231,
 }
