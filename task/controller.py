@@ -232,7 +232,27 @@ class Task:
             self._send_motion(msg)
         self._await(MOTION_STATUS, "motion", self.last_motion_serial, timeout=5.0)
         self.refresh()
+        self._run_startup_code()
         self.publish()
+
+    def _run_startup_code(self) -> None:
+        """[RS274NGC]RS274NGC_STARTUP_CODE, as LinuxCNC's task runs it after each
+        interpreter initialisation: its canonical calls (a G43's tool offset) are queued
+        and carried out like an MDI line's, whatever the machine's state."""
+        code = self.setup.startup_code
+        if not code:
+            return
+        self.queue.line = 0
+        try:
+            with self.watchdog:
+                self.canon.set_status(self.stat)
+                self.interp.synch()
+                status = self.interp.execute(code)
+                while status == INTERP_EXECUTE_FINISH:
+                    status = self.interp.execute()
+                self.canon.FINISH()
+        except InterpError as exc:
+            self.operator_error(f"[RS274NGC]RS274NGC_STARTUP_CODE: {exc}")
 
     def _saved_positions(self) -> list[emc.NMLmsg]:
         """[TRAJ]POSITION_FILE (task/positions.py): where the joints were at the last clean
@@ -615,6 +635,7 @@ class Task:
         if self.run is not Run.IDLE:
             raise Refused("cannot reset the interpreter while it runs")
         self.interp.reset()
+        self._run_startup_code()
 
     @handler(emc.EMC_TASK_PLAN_SYNCH)
     def _synch(self, _cmd: emc.NMLmsg) -> None:

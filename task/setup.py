@@ -110,6 +110,8 @@ class MachineSetup:
     tool_change_position: list[float] | None
     joints: list[JointSetup] = field(default_factory=list)
     axes: dict[int, AxisSetup] = field(default_factory=dict)  # axis index -> its setup
+    # [RS274NGC]RS274NGC_STARTUP_CODE (or its old place in [EMC]): run when task starts
+    startup_code: str = ""
     # M100..M199 programs found in PROGRAM_PREFIX and USER_M_PATH: M number -> path
     user_m_commands: dict[int, str] = field(default_factory=dict)
 
@@ -220,6 +222,9 @@ def load_setup(ini: IniFile) -> MachineSetup:
             max_acc=value(section, "MAX_ACCELERATION"),
         )
     setup.user_m_commands = _user_m_commands(config)
+    setup.startup_code = (
+        value("RS274NGC", "RS274NGC_STARTUP_CODE") or value("EMC", "RS274NGC_STARTUP_CODE") or ""
+    )
     return setup
 
 
