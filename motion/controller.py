@@ -154,8 +154,10 @@ class MotionController(SpindleControl, JogWheels, TeleopControl, StatusFilling):
         self.is_override_limits = False
         self.carte_pos_cmd = Pose()
         self.carte_pos_fb = Pose()
-        self.traj_vel = 1.0  # EMC_TRAJ_SET_VELOCITY: default feed for moves without one
-        self.traj_acc = 1.0
+        # EMC_TRAJ_SET_VELOCITY / _ACCELERATION, only reported (traj.velocity, acceleration):
+        # 0 until task sends one, as LinuxCNC's motion starts
+        self.traj_vel = 0.0
+        self.traj_acc = 0.0
         self.max_vel = math.inf
         self.max_acc = math.inf
         self.term_cond = TermCond.BLEND

@@ -111,6 +111,8 @@ class MotionStatusRuns:
             for index in range(num_spindles)
         ]
         self._io_arrays = (stat.synch_do, stat.synch_di, stat.analog_output, stat.analog_input)
+        for index in range(num_joints, len(stat.joint)):
+            _set_absent_joint_defaults(stat.joint[index])
         self._io_written: list[list | None] = [None] * len(self._io_arrays)
 
     def write_io(self, *values: list) -> None:
@@ -214,6 +216,16 @@ class StatusFilling:
                 False,  # homed: spindles are not homed (LinuxCNC reports the same)
             )
         runs.write_io(self.digital_out, self.digital_in, self.analog_out, self.analog_in)
+
+
+def _set_absent_joint_defaults(record: emc.EMC_JOINT_STAT) -> None:
+    """A joint motion does not have reads as LinuxCNC's EMC_JOINT_STAT starts (its
+    constructor's values, which no update overwrites): linear, units 1, limits -1..1,
+    following errors 1, in position."""
+    record.jointType, record.units = emc.EmcJointType.LINEAR, 1.0
+    record.minPositionLimit, record.maxPositionLimit = -1.0, 1.0
+    record.minFerror = record.maxFerror = 1.0
+    record.inpos = 1
 
 
 def _motion_type(move) -> int:

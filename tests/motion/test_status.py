@@ -138,3 +138,18 @@ def test_unset_traj_limits_read_as_linuxcnc_unlimited() -> None:
     motion.max_vel, motion.max_acc = 25.0, 300.0
     traj = status(motion).traj
     assert (traj.maxVelocity, traj.maxAcceleration) == (25.0, 300.0)
+
+
+def test_at_start_the_joints_motion_lacks_and_the_feed_read_as_in_linuxcnc() -> None:
+    """LinuxCNC's tests/startup-state: joints beyond the machine's keep EMC_JOINT_STAT's
+    start values, and no feed velocity or acceleration is set yet."""
+    from tests.motion.test_controller import make
+
+    stat = status(make(num_joints=3))
+    for index in range(3, len(stat.joint)):
+        joint = stat.joint[index]
+        assert (joint.jointType, joint.units) == (emc.EmcJointType.LINEAR, 1.0)
+        assert (joint.minPositionLimit, joint.maxPositionLimit) == (-1.0, 1.0)
+        assert (joint.minFerror, joint.maxFerror, joint.inpos) == (1.0, 1.0, 1)
+    assert stat.joint[2].maxPositionLimit == 100.0  # a joint motion has: its own
+    assert (stat.traj.velocity, stat.traj.acceleration) == (0.0, 0.0)
