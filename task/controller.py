@@ -456,15 +456,24 @@ class Task:
         mode = cmd.mode
         if mode not in (MODE.MANUAL, MODE.AUTO, MODE.MDI):
             raise Refused(f"unknown mode {mode}")
-        if mode == self.mode:
+        if mode == self.mode and mode != MODE.MANUAL:
             return
         if self.run is Run.PROGRAM:
             raise Refused("cannot change mode while a program runs (abort it first)")
         if mode == MODE.MANUAL:
-            self._abort()
-            self._send_motion(
-                emc.EMC_TRAJ_SET_MODE(mode=emc.EMC_TRAJ_MODE_ENUM.FREE), is_waiting=True
+            # manual mode jogs world axes (teleop) once every joint is homed, else joints
+            # (free), as LinuxCNC's emcTaskSetMode; asked again (after homing) it switches,
+            # unless a jog runs (LinuxCNC ignores a mode change then)
+            if mode != self.mode:
+                self._abort()
+            elif self.stat.motion.jogging_active:
+                return
+            joints = self.stat.motion.joint
+            is_all_homed = all(joints[i].homed for i in range(len(self.setup.joints)))
+            traj_mode = (
+                emc.EMC_TRAJ_MODE_ENUM.TELEOP if is_all_homed else emc.EMC_TRAJ_MODE_ENUM.FREE
             )
+            self._send_motion(emc.EMC_TRAJ_SET_MODE(mode=traj_mode), is_waiting=True)
         self.mode = MODE(mode)
 
     @handler(emc.EMC_TRAJ_SET_TELEOP_ENABLE)
