@@ -150,6 +150,10 @@ class MotionController(SpindleControl, JogWheels, TeleopControl, StatusFilling):
         )
         self.joint_limiter = JointLimiter(self._inverse_array)
         self.mode = FREE
+        # homing that leaves every joint homed ends free mode: world axes jog from then
+        # on, as LinuxCNC's motion switches to teleop mode by itself once in position
+        self.is_teleop_after_homing = False
+        self.was_all_homed = False  # (free mode's last period)
         self.is_enabled = False
         self.is_override_limits = False
         self.carte_pos_cmd = Pose()
@@ -277,6 +281,8 @@ class MotionController(SpindleControl, JogWheels, TeleopControl, StatusFilling):
     @handler(emc.EMC_TRAJ_SET_MODE)
     def _set_mode(self, cmd: emc.EMC_TRAJ_SET_MODE) -> None:
         mode = cmd.mode
+        self.is_teleop_after_homing = False  # (a mode asked for replaces the one pending)
+        self.was_all_homed = all(j.is_homed for j in self.joints)
         if mode == self.mode:
             return
         if mode not in (FREE, COORD, TELEOP):
@@ -805,6 +811,13 @@ class MotionController(SpindleControl, JogWheels, TeleopControl, StatusFilling):
                 self.errors.append(error)
             for joint in self.joints:
                 joint.pos_cmd = joint.planner.step(dt)
+            # (a joint homed in place is homed by the command already: seen here)
+            is_all_homed = all(j.is_homed for j in self.joints)
+            if is_all_homed and not self.was_all_homed:
+                self.is_teleop_after_homing = True
+            self.was_all_homed = is_all_homed
+            if self.is_teleop_after_homing and not self._is_moving():
+                self._set_mode(emc.EMC_TRAJ_SET_MODE(mode=TELEOP))
         if self.extra_joints.count:  # (hook) homed extra joints follow posthome-cmd
             self.extra_joints.posthome_cmd[:] = inputs.posthome_cmd
             self.extra_joints.step(dt)

@@ -52,8 +52,8 @@ def enabled_homed(mode=COORD) -> MotionController:
         if not motion.homing.is_homing and motion.is_in_position:
             break
     assert all(j.is_homed for j in motion.joints)
-    if mode == COORD:
-        assert motion.handle(emc.EMC_TRAJ_SET_MODE(mode=COORD)) is None
+    # (homing goes into teleop mode by itself, as LinuxCNC's: asked for here as the others)
+    assert motion.handle(emc.EMC_TRAJ_SET_MODE(mode=mode)) is None
     return motion
 
 

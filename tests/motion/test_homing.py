@@ -362,3 +362,27 @@ def test_homing_during_a_jog_first_decelerates_within_limits() -> None:  # MOT-0
     assert acc.max() <= 500.0 * (1 + 1e-6)
     # the switch edge at x=50 is joint position 0, so home (40) is at x=90
     assert axis.joint.is_homed and axis.x == pytest.approx(90.0, abs=0.01)
+
+
+def test_homing_every_joint_ends_free_mode_in_teleop_as_linuxcnc() -> None:
+    """LinuxCNC's motion switches to teleop mode once homing has left every joint homed
+    and motion is at rest (its tests/lathe jogs an axis right after homing, without
+    asking for a mode); until then it stays in free mode."""
+    from motion.controller import FREE, TELEOP
+    from nml import emc
+    from tests.motion.test_controller import make, run
+
+    motion = make()
+    assert motion.handle(emc.EMC_TRAJ_ENABLE()) is None
+    assert motion.handle(emc.EMC_JOINT_HOME(joint=-1)) is None
+    assert motion.mode == FREE  # (homed in place at once: the switch comes with a period)
+    modes = []
+    for _ in range(10_000):
+        run(motion, 1)
+        modes.append(motion.mode)
+        if motion.mode == TELEOP:
+            break
+    assert all(j.is_homed for j in motion.joints) and motion.is_in_position
+    assert set(modes[:-1]) <= {FREE} and modes[-1] == TELEOP
+    jog = emc.EMC_JOG_CONT(joint_or_axis=0, vel=5.0, jjogmode=emc.JOG_MODE.TELEOP)
+    assert motion.handle(jog) is None

@@ -202,6 +202,8 @@ def test_a_homed_extra_joint_follows_posthome_cmd_within_its_limits(hal: Hal) ->
 
 def test_a_homed_extra_joint_cannot_be_jogged_nor_unhomed_with_motion_on(hal: Hal) -> None:
     motion = hal.motion
+    # homing left motion in teleop mode (as LinuxCNC's): joint jogs need free mode
+    assert motion.handle(emc.EMC_TRAJ_SET_MODE(mode=FREE)) is None
     jog = emc.EMC_JOG_INCR(joint_or_axis=EXTRA, incr=1.0, vel=10.0, jjogmode=emc.JOG_MODE.JOINT)
     assert "posthome-cmd" in motion.handle(jog)
     assert motion.handle(emc.EMC_JOINT_UNHOME(joint=EXTRA)) == (
@@ -238,6 +240,8 @@ def test_an_indexing_move_waits_for_the_unlock_and_relocks_before_the_next(hal: 
 
 def test_a_locking_indexer_cannot_be_jogged(hal: Hal) -> None:
     motion = hal.motion
+    # homing left motion in teleop mode (as LinuxCNC's): joint jogs need free mode
+    assert motion.handle(emc.EMC_TRAJ_SET_MODE(mode=FREE)) is None
     jog = emc.EMC_JOG_INCR(joint_or_axis=LOCKING, incr=1.0, vel=10.0, jjogmode=emc.JOG_MODE.JOINT)
     assert motion.handle(jog) == "cannot jog locking indexer joint 3"
     assert motion.mode == FREE
