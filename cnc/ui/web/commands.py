@@ -308,6 +308,10 @@ def _jog(c: Commands, r: dict[str, Any]) -> None:
         raise CommandError("the jog speed must be above 0")
     velocity = speed if direction >= 0 else -speed
     c.ensure_mode(cnc.MODE_MANUAL)
+    if c.stat.motion_mode == cnc.TRAJ_MODE_TELEOP:
+        # homed, motion went teleop (as LinuxCNC's): the page jogs joints, which motion
+        # takes in free mode only, as AXIS does in its joint mode
+        c.send("teleop_enable", 0)
     if action == "start":
         c.send("jog", cnc.JOG_CONTINUOUS, 1, joint, velocity)
     elif action == "increment":
