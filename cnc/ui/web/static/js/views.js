@@ -291,6 +291,7 @@ function goToLine(line) {
 }
 
 let checkNumber = 0;  // only the last check's answer is shown (answers may cross)
+let loadNumber = 0;  // only the last load's answer fills the editor
 async function check() {
   const number = ++checkNumber;
   $("editor-state").textContent = "checking…";
@@ -301,6 +302,7 @@ async function check() {
 }
 
 editor.addEventListener("input", () => {
+  loadNumber++;  // a load still on its way must not replace what the user typed
   showGutter();
   $("editor-state").textContent = "edited";
   clearTimeout(checkTimer);
@@ -312,8 +314,10 @@ $("editor-check").onclick = check;
 async function loadEditor(name) {
   const file = name || $("editor-file").value.trim() || (state.program && state.program.name_in_prefix);
   if (!file) { notice("error", "name a program to load (in the program folder)"); return; }
+  const number = ++loadNumber;
   try {
     const answer = await fetchJson(`/api/editor?file=${encodeURIComponent(file)}`);
+    if (number !== loadNumber) return;
     $("editor-file").value = answer.file;
     editor.value = answer.text;
     showGutter();
