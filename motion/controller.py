@@ -315,14 +315,32 @@ class MotionController(SpindleControl, JogWheels, TeleopControl, StatusFilling):
         )
 
     # ---------------------------------------------------------------- jogs (free mode)
-    @handler(emc.EMC_JOG_CONT, emc.EMC_JOG_INCR, emc.EMC_JOG_ABS, emc.EMC_JOG_STOP)
+    @handler(emc.EMC_JOG_STOP)
+    def _jog_stop(self, cmd: emc.EMC_JOG_STOP) -> None:
+        """Stop a jog: accepted in any state and mode, never refused (MOT-052). A stop
+        sent for a joint while motion is in teleop (or for an axis in free mode) stops
+        what that index is doing now, as LinuxCNC's jog abort does."""
+        index = cmd.joint_or_axis
+        is_joint = cmd.jjogmode == emc.JOG_MODE.JOINT
+        for key in ((is_joint, index), (not is_joint, index)):
+            is_joint_key, number = key
+            if is_joint_key and (self.homing.is_homing or not 0 <= number < len(self.joints)):
+                continue  # (homing owns the joint planners; abort cancels it)
+            if not is_joint_key and not 0 <= number < NUM_AXES:
+                continue
+            self.jog_leases.pop(key, None)
+            planner = self.jog_planner(key)
+            if planner.is_active:
+                planner.stop()
+
+    @handler(emc.EMC_JOG_CONT, emc.EMC_JOG_INCR, emc.EMC_JOG_ABS)
     def _jog(self, cmd: emc.NMLmsg) -> None:
         """Jog a joint in free mode, or a world axis in teleop mode (MOT-045..052)."""
         if not self.is_enabled:
             raise Refused("cannot jog with motion disabled")
         if self.homing.is_homing:
             raise Refused("cannot jog while homing")
-        if self.is_jog_inhibited and not isinstance(cmd, emc.EMC_JOG_STOP):
+        if self.is_jog_inhibited:
             raise Refused("jogging is inhibited (motion.jog-inhibit)")
         index = cmd.joint_or_axis
         if cmd.jjogmode == emc.JOG_MODE.JOINT:
@@ -333,7 +351,7 @@ class MotionController(SpindleControl, JogWheels, TeleopControl, StatusFilling):
             problem = self.extra_joints.check_jog(index) or self.indexers.check_jog(
                 index, None, is_locking
             )
-            if problem and not isinstance(cmd, emc.EMC_JOG_STOP):
+            if problem:
                 raise Refused(problem)  # (hook)
             planner, name = joint.planner, f"joint {index}"
             override = self.is_override_limits or not joint.is_homed
@@ -343,14 +361,12 @@ class MotionController(SpindleControl, JogWheels, TeleopControl, StatusFilling):
             if not 0 <= index < NUM_AXES or not self._has_axis(index):
                 raise Refused(f"axis {index} is not used by this machine")
             problem = self.indexers.check_jog(None, index)
-            if problem and not isinstance(cmd, emc.EMC_JOG_STOP):
+            if problem:
                 raise Refused(problem)  # (hook)
             planner, name = self.axis_planners[index], f"axis {AXIS_LETTERS[index]}"
             override = self.is_override_limits
         try:
-            if isinstance(cmd, emc.EMC_JOG_STOP):
-                planner.stop()
-            elif isinstance(cmd, emc.EMC_JOG_CONT):
+            if isinstance(cmd, emc.EMC_JOG_CONT):
                 planner.jog_cont(cmd.vel, override)
             elif isinstance(cmd, emc.EMC_JOG_INCR):
                 direction = math.copysign(1.0, cmd.vel) if cmd.vel else 1.0

@@ -105,6 +105,8 @@ class EMC_TASK_STATE_ENUM(enum.IntEnum):
 
 # What manual motion (jogs, homing, the teleop vector) needs of task (``requires=``)
 ON_IN_MANUAL = Requires(state=EMC_TASK_STATE_ENUM.ON, mode=EMC_TASK_MODE_ENUM.MANUAL)
+# What a stop needs: nothing (a stop is never refused for the state or mode it comes in)
+ANYTIME = Requires()
 
 
 class EMC_TASK_EXEC_ENUM(enum.IntEnum):
@@ -622,7 +624,7 @@ class EMC_JOG_ABS(EMC_JOG_CMD_MSG, type_id=126):
     jjogmode: i32
 
 
-class EMC_JOG_STOP(EMC_JOG_CMD_MSG, type_id=136):
+class EMC_JOG_STOP(EMC_JOG_CMD_MSG, type_id=136, requires=ANYTIME):
     jjogmode: i32
 
 

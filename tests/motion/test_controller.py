@@ -312,6 +312,25 @@ def test_teleop_jogs_world_axes_through_the_kinematics() -> None:
     assert motion.handle(unused) == "axis 4 is not used by this machine"
 
 
+def test_a_jog_stop_is_never_refused_and_stops_what_its_index_does_now() -> None:
+    """LinuxCNC's jog abort 'can happen at any time': a UI that sends a joint stop while
+    motion went teleop (homing completes) must still stop the axis jog."""
+    motion = enabled_homed(mode=FREE)
+    motion.handle(emc.EMC_TRAJ_SET_MODE(mode=emc.EMC_TRAJ_MODE_ENUM.TELEOP))
+    assert motion.handle(emc.EMC_JOG_CONT(joint_or_axis=0, vel=20.0, jjogmode=0)) is None
+    run(motion, 200)
+    joint_stop = emc.EMC_JOG_STOP(joint_or_axis=0, jjogmode=emc.JOG_MODE.JOINT)
+    assert motion.handle(joint_stop) is None
+    run(motion, 1000)
+    stopped_at = motion.carte_pos_cmd.x
+    run(motion, 200)
+    assert motion.carte_pos_cmd.x == stopped_at and 0.0 < stopped_at < 20.0
+    assert motion.jog_leases == {}
+    motion.handle(emc.EMC_TRAJ_DISABLE())
+    assert motion.handle(joint_stop) is None
+    assert motion.handle(emc.EMC_JOG_STOP(joint_or_axis=8, jjogmode=0)) is None
+
+
 def test_teleop_jog_stops_at_the_axis_soft_limit() -> None:
     motion = enabled_homed(mode=FREE)
     motion.handle(emc.EMC_TRAJ_SET_MODE(mode=emc.EMC_TRAJ_MODE_ENUM.TELEOP))

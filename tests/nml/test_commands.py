@@ -102,3 +102,5 @@ def test_requires_names_what_is_missing() -> None:
     needs_mdi = Requires(mode=mode.MDI)
     assert unmet(needs_mdi, state.ON, mode.AUTO) == "must be in MDI mode, not AUTO"
     assert unmet(None, state.ESTOP, mode.AUTO) is None
+    assert emc.EMC_JOG_CONT.REQUIRES == emc.ON_IN_MANUAL
+    assert unmet(emc.EMC_JOG_STOP.REQUIRES, state.ESTOP, mode.AUTO) is None  # never refused
