@@ -10,9 +10,11 @@ server as its own process, and the test as a page on its websocket.
 from __future__ import annotations
 
 import asyncio
+import shutil
 import threading
 import time
 from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
 import aiohttp
@@ -21,8 +23,12 @@ import pytest
 import cnc
 from hal.api import HAL_BIT, HAL_OUT, component
 from hal.core import Hal
-from tests.task.test_machine import Machine
-from tests.web.conftest import is_result, page, receive_until
+from tests.conftest import Processes
+from tests.hal.halrun_util import REPO
+from tests.task.test_machine import Machine, launched
+from tests.web.conftest import free_port, is_result, page, receive_until, start_server
+
+SIM = REPO / "configs" / "sim"
 
 
 @pytest.fixture
@@ -161,3 +167,49 @@ def probe_an_edge(machine: Machine, page_url: str, hal: Hal) -> None:
         is_running.clear()
         watcher.join()
         part.exit()
+
+
+@pytest.mark.slow
+def test_a_homed_gantry_jogs_y_as_one_axis_and_a_stop_stops_what_started(
+    procs: Processes, tmp_path: Path
+) -> None:
+    """Once homed, an axis letter jogs the world axis (teleop, as AXIS in world mode): both
+    Y joints of a gantry move together, never racking it; the page's stop names what its
+    start moved, so Z stops although Z is joint 3 but axis 2."""
+    folder = tmp_path / "gantry"
+    shutil.copytree(SIM, folder)
+    (folder / "mill.ini").write_text((SIM / "gantry.ini").read_text())
+    with launched(procs, folder) as machine:
+        machine.ready_to_move()
+        machine.until(lambda s: all(s.homed[:4]) and s.inpos)
+        server = start_server(procs, machine, port := free_port())
+        try:
+            url = f"http://127.0.0.1:{port}/"
+            before = list(machine.stat.joint_actual_position[:4])
+            jog = {"cmd": "jog", "action": "increment", "axis": "Y", "direction": 1}
+            assert asyncio.run(talk(url, jog | {"speed": 600, "distance": 2}))["status"] == "DONE"
+            machine.until(
+                lambda s: s.joint_actual_position[1] == pytest.approx(before[1] + 2)
+                and s.joint_actual_position[2] == pytest.approx(before[2] + 2)
+                and s.inpos
+            )
+            assert machine.stat.motion_mode == cnc.TRAJ_MODE_TELEOP
+            asyncio.run(start_and_stop_a_continuous_jog(url, "Z"))
+            machine.until(lambda s: s.inpos and s.current_vel == 0)
+            z = machine.stat.joint_actual_position[3]
+            time.sleep(0.3)
+            machine.stat.poll()
+            assert machine.stat.joint_actual_position[3] == z != before[3]
+        finally:
+            server.terminate()
+            server.communicate(timeout=10)
+
+
+async def start_and_stop_a_continuous_jog(url: str, axis: str) -> None:
+    async with aiohttp.ClientSession() as session, page(session, url + "api/v1/ws") as socket:
+        start = {"cmd": "jog", "action": "start", "axis": axis, "direction": -1, "speed": 300}
+        await socket.send_json(start | {"id": 1})
+        assert (await receive_until(socket, is_result(1)))["status"] == "DONE"
+        await asyncio.sleep(0.2)
+        await socket.send_json({"cmd": "jog", "action": "stop", "axis": axis, "id": 2})
+        assert (await receive_until(socket, is_result(2)))["status"] == "DONE"

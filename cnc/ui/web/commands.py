@@ -25,6 +25,7 @@ from cnc.ui.formatting import parse_float
 from cnc.ui.web.offsets import SYSTEMS
 from cnc.ui.web.settings import Settings
 from iocontrol.tooltable import ToolEntry, ToolTable, ToolTableError
+from nml.axes import AXIS_LETTERS
 from nml.commands import Handlers, Refused, handler
 
 TIMEOUT_S = 10.0  # how long a command may take before the page is told it still runs
@@ -163,6 +164,24 @@ class Commands:
         if self.stat.task_mode != mode:
             self.send("mode", mode)
 
+    def jog_target(self, request: dict[str, Any]) -> tuple[bool, int]:
+        """What a jog moves: (is joint, index). An axis letter jogs that world axis once
+        every joint is homed (motion is then in teleop, as AXIS jogs in world mode: a
+        gantry's two joints move together), its joint before; a "joint" number always
+        jogs that joint."""
+        joint = self.joint_of(request)
+        if "joint" in request:
+            return True, joint
+        try:
+            stat = self.stat
+        except cnc.error as exc:  # the controller is not running, or restarted
+            self.forget()
+            raise CommandError(str(exc)) from None
+        homed = stat.homed[: stat.joints]
+        if homed and all(homed):
+            return False, AXIS_LETTERS.index(self.settings.axes[joint])
+        return True, joint
+
     def joint_of(self, request: dict[str, Any]) -> int:
         """The joint an "axis" letter (trivial kinematics: its place in COORDINATES) or a
         "joint" number names."""
@@ -296,11 +315,13 @@ def _override_limits(c: Commands, r: dict[str, Any]) -> None:
 @handler("jog")
 def _jog(c: Commands, r: dict[str, Any]) -> None:
     """{"action": "start"|"stop"|"increment", "axis": "X" (or "joint": 0), "direction":
-    1|-1, "speed": units per minute, "distance": machine units}. Motion jogs joints."""
+    1|-1, "speed": units per minute, "distance": machine units}. Which joint or axis moves:
+    ``Commands.jog_target`` (or "target": [is joint, index], the hub's lease of a start)."""
     action = r.get("action")
-    joint = c.joint_of(r)
+    is_joint, index = r["target"] if "target" in r else c.jog_target(r)
+    mode = int(is_joint)  # jog()'s jjogmode: 1 a joint, 0 a world axis
     if action == "stop":
-        c.send("jog", cnc.JOG_STOP, 1, joint)
+        c.send("jog", cnc.JOG_STOP, mode, index)
         return
     direction = number(r, "direction")
     speed = number(r, "speed") / 60.0  # the API takes units per second
@@ -308,14 +329,13 @@ def _jog(c: Commands, r: dict[str, Any]) -> None:
         raise CommandError("the jog speed must be above 0")
     velocity = speed if direction >= 0 else -speed
     c.ensure_mode(cnc.MODE_MANUAL)
-    if c.stat.motion_mode == cnc.TRAJ_MODE_TELEOP:
-        # homed, motion went teleop (as LinuxCNC's): the page jogs joints, which motion
-        # takes in free mode only, as AXIS does in its joint mode
-        c.send("teleop_enable", 0)
+    is_teleop = c.stat.motion_mode == cnc.TRAJ_MODE_TELEOP
+    if is_teleop == is_joint:  # motion jogs joints in free mode, axes in teleop mode
+        c.send("teleop_enable", int(not is_joint))
     if action == "start":
-        c.send("jog", cnc.JOG_CONTINUOUS, 1, joint, velocity)
+        c.send("jog", cnc.JOG_CONTINUOUS, mode, index, velocity)
     elif action == "increment":
-        c.send("jog", cnc.JOG_INCREMENT, 1, joint, velocity, number(r, "distance", 0.0))
+        c.send("jog", cnc.JOG_INCREMENT, mode, index, velocity, number(r, "distance", 0.0))
     else:
         raise CommandError("'action' must be one of start, stop, increment")
 

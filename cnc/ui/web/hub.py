@@ -57,6 +57,22 @@ PROBE_TIMEOUT_S = 600.0  # one probing step (a slow search may take minutes)
 ALWAYS_SENT = ("estop", "abort")
 
 
+@dataclass
+class JogLease:
+    """A continuous jog a client holds: what it moves (``Commands.jog_target``: its stop
+    must name the same) and when the client last held it (monotonic)."""
+
+    target: tuple[bool, int]
+    held: float
+
+
+def jog_name(request: dict[str, Any]) -> str:
+    """What a client calls a jog: an axis letter or "joint N"."""
+    if "joint" in request:
+        return f"joint {request['joint']}"
+    return str(request.get("axis", "")).upper()
+
+
 @dataclass(eq=False)
 class Client:
     """One API client: a websocket (a page, a script), or one HTTP call (no socket)."""
@@ -66,7 +82,7 @@ class Client:
     # What it subscribed to (rpc.py): status fields, event kinds; nothing at first.
     status_fields: frozenset[str] = frozenset()
     events: frozenset[str] = frozenset()
-    jogs: dict[int, float] = field(default_factory=dict)  # joint -> last held (monotonic)
+    jogs: dict[str, JogLease] = field(default_factory=dict)  # by jog_name()
     jog_lock: asyncio.Lock = field(default_factory=asyncio.Lock)  # jogs run in order
     # Commands of one kind from one page run in the order it sent them (a slider's 40 %
     # then its reset to 100 % must not be swapped by the worker threads); kinds differ
@@ -217,9 +233,9 @@ class Hub:
             await asyncio.sleep(JOG_CHECK_S)
             now = time.monotonic()
             for client in list(self.clients):
-                for joint, held in list(client.jogs.items()):
-                    if now - held > JOG_LEASE_S:
-                        self.keep(asyncio.create_task(self._stop_jog(client, joint)))
+                for name, lease in list(client.jogs.items()):
+                    if now - lease.held > JOG_LEASE_S:
+                        self.keep(asyncio.create_task(self._stop_jog(client, name)))
 
     async def broadcast(self, message: dict[str, Any]) -> None:
         """A hub message, to every client as far as it subscribed to it."""
@@ -317,43 +333,52 @@ class Hub:
         """Jogs: "hold" refreshes a continuous jog's lease here; the others go to the
         controller, in the order the page sent them (a stop never overtakes its start)."""
         action = request.get("action")
-        try:
-            joint = self.commands.joint_of(request)
-        except CommandError as exc:
-            raise Refused(f"jog: {exc}") from None
+        name = jog_name(request)
         if action == "hold":
-            if joint in client.jogs:
-                client.jogs[joint] = time.monotonic()
-                return {"status": "DONE", "message": "DONE"}
-            raise Refused("jog: no continuous jog to hold")
+            lease = client.jogs.get(name)
+            if lease is None:
+                raise Refused("jog: no continuous jog to hold")
+            lease.held = time.monotonic()
+            return {"status": "DONE", "message": "DONE"}
         if not self.status.get("is_connected") and action != "stop":
             raise Refused("jog: refused, the controller is offline")
         async with client.jog_lock:
+            lease = client.jogs.pop(name, None)
+            if lease is not None:  # a stop (or a new start) names what the start moved
+                request = request | {"target": lease.target}
+            elif action == "start":
+                try:
+                    target = await asyncio.get_running_loop().run_in_executor(
+                        self.executor, self.commands.jog_target, request
+                    )
+                except CommandError as exc:
+                    raise Refused(f"jog: {exc}") from None
+                request = request | {"target": target}
             if action == "start":
-                client.jogs[joint] = time.monotonic()
-            elif action == "stop":
-                client.jogs.pop(joint, None)
+                client.jogs[name] = JogLease(request["target"], time.monotonic())
             try:
                 return await self._execute(request)
             except Exception:
                 if action == "start":
-                    client.jogs.pop(joint, None)
+                    client.jogs.pop(name, None)
                 raise
 
-    async def _stop_jog(self, client: Client, joint: int) -> None:
-        if client.jogs.pop(joint, None) is None:
+    async def _stop_jog(self, client: Client, name: str) -> None:
+        lease = client.jogs.pop(name, None)
+        if lease is None:
             return  # stopped already
         async with client.jog_lock:
+            stop = {"cmd": "jog", "action": "stop", "target": lease.target}
             with contextlib.suppress(CommandError):  # (said on the error channel, or offline)
-                await self._execute({"cmd": "jog", "action": "stop", "joint": joint})
+                await self._execute(stop)
         if not client.socket.closed:
             text = "jog stopped: the page stopped holding it (a key or button released late?)"
             await self.notify(client, {"type": "notice", "kind": "error", "text": text})
 
     async def disconnected(self, client: Client) -> None:
         self.clients.discard(client)
-        for joint in sorted(client.jogs):
-            await self._stop_jog(client, joint)
+        for name in sorted(client.jogs):
+            await self._stop_jog(client, name)
 
     # ---------------------------------------------------------------- editor
     @handler("check_program")
