@@ -184,8 +184,6 @@ class Task:
         self.is_paused = False
         self.is_reading_done = True  # the interpreter has nothing more to read for this run
         self.is_waiting_for_synch = False
-        self.is_optional_stop = False
-        self.is_block_delete = True  # as the canon starts (LinuxCNC's INIT_CANON: ON)
         self.delay_until = 0.0
         self.input_wait: tuple[int, float] | None = None  # an M66 under way: (mode, deadline)
         self.mdi_queue: deque[tuple[int, str]] = deque()
@@ -653,12 +651,11 @@ class Task:
 
     @handler(emc.EMC_TASK_PLAN_SET_OPTIONAL_STOP)
     def _set_optional_stop(self, cmd: emc.NMLmsg) -> None:
-        self.is_optional_stop = bool(cmd.state)
+        self.canon.SET_OPTIONAL_PROGRAM_STOP(bool(cmd.state))
 
     @handler(emc.EMC_TASK_PLAN_SET_BLOCK_DELETE)
     def _set_block_delete(self, cmd: emc.NMLmsg) -> None:
-        self.is_block_delete = bool(cmd.state)
-        self.canon.SET_BLOCK_DELETE(self.is_block_delete)
+        self.canon.SET_BLOCK_DELETE(bool(cmd.state))
 
     @handler(emc.EMC_OPERATOR_ERROR, emc.EMC_OPERATOR_TEXT, emc.EMC_OPERATOR_DISPLAY)
     def _forward_operator_message(self, cmd: emc.NMLmsg) -> None:
@@ -936,8 +933,10 @@ class Task:
         """M0, and M1 with the optional stop on: pause once motion is at rest."""
         if not self._is_motion_done():
             return False
-        if isinstance(msg, emc.EMC_TASK_PLAN_PAUSE) or self.is_optional_stop:
+        if isinstance(msg, emc.EMC_TASK_PLAN_PAUSE) or self.canon.GET_OPTIONAL_PROGRAM_STOP():
             self.is_paused = True
+            # motion pauses too, as LinuxCNC's: stat.paused reads true at an M0/M1
+            self._send_motion(emc.EMC_TRAJ_PAUSE())
         return True
 
     @handler(emc.EMC_TASK_PLAN_END, table=QUEUE)
@@ -1195,8 +1194,9 @@ class Task:
             task.interpState = INTERP.READING
         task.execState = EXEC.DONE if self._is_everything_done() else EXEC.WAITING_FOR_MOTION
         task.task_paused = self.is_paused
-        task.optional_stop_state = self.is_optional_stop
-        task.block_delete_state = self.is_block_delete
+        # (the canon holds both switches; both start on, as LinuxCNC's)
+        task.optional_stop_state = self.canon.GET_OPTIONAL_PROGRAM_STOP()
+        task.block_delete_state = self.canon.GET_BLOCK_DELETE()
         task.file = emc.fit_text(self.file)
         task.callLevel = interp.call_level
         task.motionLine = self.stat.motion.traj.id

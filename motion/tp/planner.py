@@ -831,8 +831,11 @@ class TrajectoryPlanner:
 
     # ------------------------------------------------------------------ commands
     def pause(self) -> None:
-        """Feed hold: decelerate along the path and stay there (MOT-037)."""
+        """Feed hold: decelerate along the path and stay there (MOT-037). With nothing
+        queued it holds at once (task's M0/M1): moves queued later wait for resume."""
         self._is_stopping = True
+        if not self._moves:
+            self.is_paused = True
 
     def resume(self) -> None:
         """Continue exactly from where the pause stopped (MOT-038)."""

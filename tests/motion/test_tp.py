@@ -357,6 +357,21 @@ def test_pause_decelerates_on_the_path_and_resume_continues_exactly() -> None:
     assert np.allclose(path[-1], corner[-1])
 
 
+def test_a_pause_at_rest_holds_at_once_and_later_moves_wait_for_resume() -> None:
+    """Task's M0/M1 pause motion with nothing queued: stat.paused reads true at once (as
+    LinuxCNC's), and the moves after the stop wait for the resume."""
+    tp = planner()
+    tp.pause()
+    assert tp.is_paused
+    add_polyline(tp, [(0, 0, 0), (5, 0, 0)], tolerance=0.01)
+    run = Run(tp)
+    run.step(200)
+    assert tp.vel == 0 and np.allclose(tp.pos[:3], 0) and tp.is_paused
+    tp.resume()
+    run.until_done()
+    assert np.allclose(tp.pos[:3], (5, 0, 0)) and not tp.is_paused
+
+
 def test_step_runs_to_the_end_of_the_current_move_then_pauses() -> None:  # MOT-039
     tp = planner()
     add_polyline(tp, [(0, 0, 0), (5, 0, 0), (5, 5, 0), (0, 5, 0)], tolerance=0.01)

@@ -130,3 +130,25 @@ def test_run_from_line_after_a_skipped_tool_change_is_refused(machine: Machine) 
     texts = [text for _, text in machine.messages()]
     assert any("changes to tool 2" in t and "load tool 2 first" in t for t in texts), texts
     assert machine.stat.position[0] == pytest.approx(0.0)  # nothing moved
+
+
+def test_optional_stop_starts_on_so_m1_pauses_until_it_is_switched_off(machine: Machine) -> None:
+    """LinuxCNC starts with the optional stop on (its startup-state test): M1 pauses like
+    M0, motion paused too (stat.paused, checked on LinuxCNC's sim); switched off, M1 is
+    passed over."""
+    program = machine.folder / "m1.ngc"
+    program.write_text("G21 G90\nG0 X5\nM1\nG0 X10\nM1\nG0 X15\nM2\n")
+    machine.stat.poll()
+    assert machine.stat.optional_stop is True and machine.stat.block_delete is True
+    machine.ready_to_move()
+    c = machine.command
+    machine.open_program(program)
+    c.auto(cnc.AUTO_RUN, 0)
+    machine.until(lambda s: s.interp_state == cnc.INTERP_PAUSED and s.current_vel == 0)
+    assert round(machine.stat.position[0]) == 5
+    machine.until(lambda s: s.paused and s.task_paused)
+    c.set_optional_stop(0)
+    assert c.wait_complete() == cnc.RCS_DONE
+    c.auto(cnc.AUTO_RESUME)
+    machine.until(lambda s: s.interp_state == cnc.INTERP_IDLE)
+    assert round(machine.stat.position[0]) == 15 and machine.stat.optional_stop is False
