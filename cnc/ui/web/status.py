@@ -95,8 +95,10 @@ def snapshot(s: Any, settings: Settings) -> dict[str, Any]:
         "is_optional_stop": bool(s.optional_stop),
         "is_block_delete": bool(s.block_delete),
         "is_paused": bool(s.paused) or bool(s.task_paused),
-        # task paused by the program (M0, M1, M60) rather than by the operator (feed hold)
-        "is_program_stop": bool(s.task_paused) and not bool(s.paused),
+        # task paused by the program (M0, M1, M60, a step's end) rather than by the operator
+        # (feed hold): both pause motion (as LinuxCNC's), but a program stops only once
+        # motion's queue is empty, and a feed hold keeps the move it holds queued
+        "is_program_stop": bool(s.task_paused) and s.queue == 0,
         "program_units": {1: "inch", 2: "mm", 3: "cm"}.get(s.program_units, "mm"),
         "rotation_xy": _number(s.rotation_xy, 4),
         "queued_mdi": s.queued_mdi_commands,
