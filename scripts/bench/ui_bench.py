@@ -41,7 +41,9 @@ the page in Debian's chromium through Playwright (skipped without them):
   s, STOP is pressed (mouse down on it, as a hand would); ``rest_ms``: until the machine is
   at rest (stat.current_vel 0, polled every 0.5 ms), N times: median and max, beside
   ``braking_ms``, what braking from the speed of the moment takes at the machine's
-  acceleration (the rest is the command's way there).
+  acceleration (the rest is the command's way there); ``taken_ms``, from the press until
+  task took the abort (its interpreter idle), and ``page_wait_ms_max``, how long a press
+  waited for the page's thread (the event's time to its handler).
 - "estimate", per shared program (../shared/reference/programs): the estimate
   (cnc/ui/estimate.py, from X0 Y0 Z10 as the runner starts) beside the run time on our
   machine (program_runner.run_program: RUN to idle and in position), and the error in
@@ -407,8 +409,14 @@ def stop_part(page, folder: Path, count: int, max_acc: float) -> dict[str, objec
         " return Number(p.points) > 0 && p.drawn === p.points; })()",
         timeout=WAIT_MS, polling=50,
     )  # fmt: skip
+    # how long the press waited for the page's thread (event time to the handler)
+    page.evaluate(
+        "() => { window.stopWaits = []; document.getElementById('abort').addEventListener("
+        "'pointerdown', (e) => window.stopWaits.push(performance.now() - e.timeStamp),"
+        " { capture: true }); }"
+    )
     s = cnc.stat()
-    rests, brakings = [], []
+    rests, brakings, takens = [], [], []
     for _ in range(count):
         page.click("#run")
         wait_for(s, lambda s: s.current_vel > 0, 60)
@@ -419,6 +427,8 @@ def stop_part(page, folder: Path, count: int, max_acc: float) -> dict[str, objec
         speed = s.current_vel
         start = time.perf_counter()
         page.mouse.down()
+        wait_for(s, lambda s: s.interp_state == cnc.INTERP_IDLE or s.current_vel == 0, 30, 0.0005)
+        takens.append((time.perf_counter() - start) * 1000)
         wait_for(s, lambda s: s.current_vel == 0, 30, 0.0005)
         rests.append((time.perf_counter() - start) * 1000)
         page.mouse.up()
@@ -429,6 +439,13 @@ def stop_part(page, folder: Path, count: int, max_acc: float) -> dict[str, objec
         "rest_ms_median": round(percentile(rests, 0.5), 1),
         "rest_ms_max": round(max(rests), 1),
         "braking_ms_median": round(percentile(brakings, 0.5), 1),
+        # from the press to task having taken the abort (its interpreter idle), and the
+        # part of that the press waited for the page's thread
+        "taken_ms_median": round(percentile(takens, 0.5), 1),
+        "taken_ms_max": round(max(takens), 1),
+        "page_wait_ms_max": round(max(page.evaluate("window.stopWaits")), 1),
+        "rest_ms_all": [round(r) for r in rests],
+        "taken_ms_all": [round(t) for t in takens],
         "runs": count,
     }
 

@@ -189,9 +189,11 @@ def test_a_homed_gantry_jogs_y_as_one_axis_and_a_stop_stops_what_started(
             jog = {"cmd": "jog", "action": "increment", "axis": "Y", "direction": 1}
             assert asyncio.run(talk(url, jog | {"speed": 600, "distance": 2}))["status"] == "DONE"
             machine.until(
-                lambda s: s.joint_actual_position[1] == pytest.approx(before[1] + 2)
-                and s.joint_actual_position[2] == pytest.approx(before[2] + 2)
-                and s.inpos
+                lambda s: (
+                    s.joint_actual_position[1] == pytest.approx(before[1] + 2)
+                    and s.joint_actual_position[2] == pytest.approx(before[2] + 2)
+                    and s.inpos
+                )
             )
             assert machine.stat.motion_mode == cnc.TRAJ_MODE_TELEOP
             asyncio.run(start_and_stop_a_continuous_jog(url, "Z"))
