@@ -43,7 +43,8 @@ the page in Debian's chromium through Playwright (skipped without them):
   ``braking_ms``, what braking from the speed of the moment takes at the machine's
   acceleration (the rest is the command's way there); ``taken_ms``, from the press until
   task took the abort (its interpreter idle), and ``page_wait_ms_max``, how long a press
-  waited for the page's thread (the event's time to its handler).
+  waited for the page's thread (the event's time to its handler), and
+  ``running_longest_task_ms``, the page's longest busy stretch while the program ran.
 - "estimate", per shared program (../shared/reference/programs): the estimate
   (cnc/ui/estimate.py, from X0 Y0 Z10 as the runner starts) beside the run time on our
   machine (program_runner.run_program: RUN to idle and in position), and the error in
@@ -415,6 +416,7 @@ def stop_part(page, folder: Path, count: int, max_acc: float) -> dict[str, objec
         "'pointerdown', (e) => window.stopWaits.push(performance.now() - e.timeStamp),"
         " { capture: true }); }"
     )
+    page.evaluate(LONGEST_TASK)  # the longest stretch the page's thread is busy while running
     s = cnc.stat()
     rests, brakings, takens = [], [], []
     for _ in range(count):
@@ -444,6 +446,7 @@ def stop_part(page, folder: Path, count: int, max_acc: float) -> dict[str, objec
         "taken_ms_median": round(percentile(takens, 0.5), 1),
         "taken_ms_max": round(max(takens), 1),
         "page_wait_ms_max": round(max(page.evaluate("window.stopWaits")), 1),
+        "running_longest_task_ms": round(page.evaluate("window.benchLongest"), 1),
         "rest_ms_all": [round(r) for r in rests],
         "taken_ms_all": [round(t) for t in takens],
         "runs": count,
