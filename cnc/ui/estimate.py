@@ -151,6 +151,7 @@ class MotionModel:
         self.extra_s = 0.0  # dwells
         self.read_s = 0.0  # machine time at which task has read what was taken so far
         self.is_intake_limited = clock is not None  # (None: the planner's own time)
+        self.has_queued = False  # a move was queued
         self.moves_this_period = 0
         self.term, self.tolerance = TermCond.BLEND, 0.0
         self.motion_id = 0  # the line of the moves queued next
@@ -232,8 +233,11 @@ class MotionModel:
 
     # ---------------------------------------------------------------- time
     def read(self, seconds: float) -> None:
-        """Task spent ``seconds`` reading one more line (its moves come after that)."""
-        self.read_s += seconds
+        """Task spent ``seconds`` reading one more line (its moves come after that). Not
+        counted before the first move: that is a few ms in task, but the estimate's
+        own first lines pay its warm-up (imports, caches) that task paid long before."""
+        if self.has_queued:
+            self.read_s += seconds
 
     def _add(self, add: Callable[[], object]) -> None:
         """Queue one move with ``add`` once motion would: after task read it, with room
@@ -249,6 +253,7 @@ class MotionModel:
             self._step()
         add()
         self.moves_this_period += 1
+        self.has_queued = True
 
     def finish(self) -> None:
         """Step until everything queued is done (a queue buster, or the program's end);
