@@ -189,15 +189,18 @@ class command:  # LinuxCNC's name: linuxcnc.command
         return -1 if result is None else result
 
     # ------------------------------------------------------------------ machine and task
-    def state(self, state: int) -> None:
-        """STATE_ESTOP, STATE_ESTOP_RESET, STATE_ON or STATE_OFF."""
+    def state(self, state: int, request: int = 0) -> None:
+        """STATE_ESTOP, STATE_ESTOP_RESET, STATE_ON or STATE_OFF. ``request``: the stamp of
+        the E-stop this process put on the safety board already (``cnc.api.safety``), so
+        that task acts on it once."""
         state = _int(state)
         if state not in (c.STATE_ESTOP, c.STATE_ESTOP_RESET, c.STATE_ON, c.STATE_OFF):
             raise ValueError(
                 "Machine state should be STATE_ESTOP, STATE_ESTOP_RESET, STATE_ON, or STATE_OFF"
             )
         if state == c.STATE_ESTOP:  # first through the path no lock can block
-            self._send_safety(emc.EMC_TASK_SET_STATE(state=state, request=request_estop()))
+            stamp = _int(request) or request_estop()
+            self._send_safety(emc.EMC_TASK_SET_STATE(state=state, request=stamp))
             return
         self._send(emc.EMC_TASK_SET_STATE(state=state))
 
@@ -231,8 +234,10 @@ class command:  # LinuxCNC's name: linuxcnc.command
             raise error(f"Unexpected argument '{action}' to command.auto")
         self._send(message())
 
-    def abort(self) -> None:
-        self._send_safety(emc.EMC_TASK_ABORT(request=request_abort()))
+    def abort(self, request: int = 0) -> None:
+        """Abort. ``request``: the stamp of the abort this process put on the safety board
+        already (``cnc.api.safety``), so that task acts on it once."""
+        self._send_safety(emc.EMC_TASK_ABORT(request=_int(request) or request_abort()))
 
     def reset_interpreter(self) -> None:
         self._send(emc.EMC_TASK_PLAN_INIT())

@@ -13,6 +13,7 @@ import aiohttp
 import pytest
 
 import cnc
+from cnc.api import safety
 from cnc.ui.web.server import HUB, STATIC, Access
 from cnc.ui.web.settings import Settings
 from tests.web.conftest import API_WS, PageSocket, is_result, is_status_with, page, receive_until
@@ -402,6 +403,36 @@ async def test_a_stop_is_not_queued_behind_busy_workers(fake_task, web, monkeypa
         blocker.set()
         hub.executor.shutdown()
     assert task.next_command()["type"] == "EMC_TASK_ABORT"
+
+
+async def test_an_abort_is_on_the_safety_board_before_any_worker_takes_it(
+    fake_task, web, monkeypatch
+) -> None:
+    """The hub puts the abort on the board in its event loop; the command a worker sends
+    later carries that request's stamp, so task acts on it once."""
+    task = fake_task()
+    client = await web()
+    hub = client.app[HUB]
+    requested = []
+    monkeypatch.setattr(safety, "request_abort", lambda: requested.append(4242) or 4242)
+    monkeypatch.setattr(hub, "urgent_executor", ThreadPoolExecutor(1))
+    blocker = threading.Event()
+    hub.urgent_executor.submit(blocker.wait)  # even the stop workers are busy
+    try:
+        async with page(client) as socket:
+            await socket.send_json({"cmd": "abort", "id": 1})
+            for _ in range(500):
+                if requested:
+                    break
+                await asyncio.sleep(0.01)
+            assert requested == [4242]
+            assert task.received() == []  # no worker has sent anything yet
+            blocker.set()
+            assert (await receive_until(socket, is_result(1)))["status"] == "DONE"
+    finally:
+        blocker.set()
+        hub.urgent_executor.shutdown()
+    assert without_serial(task.next_command()) == ("EMC_TASK_ABORT", {"request": 4242})
 
 
 @pytest.mark.parametrize(

@@ -275,7 +275,11 @@ def _read_history(path: Path | None) -> list[str]:
 # ------------------------------------------------------------------ machine
 @handler("estop")
 def _estop(c: Commands, r: dict[str, Any]) -> None:
-    c.send("state", cnc.STATE_ESTOP if switch(r) else cnc.STATE_ESTOP_RESET)
+    """(an E-stop on: already on the safety board, its stamp in "board_stamp": hub.py)"""
+    if switch(r):
+        c.send("state", cnc.STATE_ESTOP, r.get("board_stamp", 0))
+    else:
+        c.send("state", cnc.STATE_ESTOP_RESET)
 
 
 @handler("machine")
@@ -624,7 +628,8 @@ def _step(c: Commands, r: dict[str, Any]) -> None:
 
 @handler("abort")
 def _abort(c: Commands, r: dict[str, Any]) -> None:
-    c.send("abort")
+    """(already on the safety board, its stamp in "board_stamp": hub.py)"""
+    c.send("abort", r.get("board_stamp", 0))
 
 
 @handler("optional_stop")

@@ -30,6 +30,7 @@ from pathlib import Path
 from typing import Any
 
 import cnc
+from cnc.api import safety
 from cnc.apikeys import OPERATE, Identity
 from cnc.ui.controller import Controller
 from cnc.ui.formatting import MESSAGE_KINDS
@@ -111,6 +112,21 @@ def is_urgent(request: dict[str, Any]) -> bool:
     """Whether a command stops something: E-stop, abort, the end of a jog."""
     name = request.get("cmd")
     return name in ("abort", "estop") or (name == "jog" and request.get("action") == "stop")
+
+
+def on_the_safety_board(request: dict[str, Any]) -> dict[str, Any]:
+    """An abort or E-stop goes on the machine's safety board at once, here in the event
+    loop (a lock-free write: motion and task act on it within a period), before a worker
+    thread sends the command, which carries its stamp ("board_stamp") so that task acts
+    once. Worker threads can be slow to start while the server is busy (up to 45 ms seen
+    under load); the board never waits for them."""
+    name = request.get("cmd")
+    stamp = 0
+    if name == "abort":
+        stamp = safety.request_abort()
+    elif name == "estop" and request.get("on") is True:
+        stamp = safety.request_estop()
+    return request | {"board_stamp": stamp} if name in ("abort", "estop") else request
 
 
 async def send(client: Client, text: str) -> None:
@@ -306,7 +322,7 @@ class Hub:
         if name == "run" and isinstance(request.get("line", 0), int):
             self.tracker.expect_start(request.get("line", 0), time.monotonic())
         if is_urgent(request):
-            return await self._execute(request)
+            return await self._execute(on_the_safety_board(request))
         async with client.order_lock(str(name)):
             return await self._execute(request)
 
