@@ -422,6 +422,16 @@ class TeleopControl:
         for planner in jogs:
             planner.reset(planner.pos)
 
+    def _is_teleop_resting(self) -> bool:
+        """At rest with nothing asked of teleop (no jog, no vector, no external offset):
+        a period would change nothing (most periods of a homed machine at rest)."""
+        vector = self.teleop
+        return (
+            not self.eoffsets.planners
+            and not any(p.is_active or p.vel for p in self.axis_planners)
+            and not (vector.target_vel.any() or vector.vel.any())
+        )
+
     def _is_teleop_moving(self) -> bool:
         return self.teleop.is_moving or any(p.is_active or p.vel for p in self.axis_planners)
 
@@ -431,6 +441,8 @@ class TeleopControl:
         velocity or acceleration limit, and each planner goes on from its share of what
         was carried out. Every planner's position is the commanded pose's."""
         jogs, vector = self.axis_planners, self.teleop
+        if self._is_teleop_resting():
+            return  # nothing moves and nothing will: the joints hold their commands
         start = vector.pos.copy()
         jog_v0 = np.array([p.vel for p in jogs])
         vector_v0 = vector.vel.copy()
