@@ -921,6 +921,20 @@ class Task:
             return not self._send_io(msg)
         return True
 
+    @handler(emc.EMC_MOTION_SET_DOUT, emc.EMC_MOTION_SET_AOUT, table=QUEUE)
+    def _output(self, msg: emc.EMC_MOTION_SET_DOUT | emc.EMC_MOTION_SET_AOUT, now: float) -> bool:
+        """M62/M63/M67 go with the next move. An immediate output (M64, M65, M68: ``now``)
+        is set once all before it is done, and task waits for motion's answer, as
+        LinuxCNC's task waits for each command it gives motion: the status task publishes
+        next, the one echoing the MDI line that set it, already shows it. (A refusal
+        stops the run through _check_motion_errors.)"""
+        if not msg.now:
+            return self._pass_on(msg, now)
+        if not self._is_everything_done() or not self._pass_on(msg, now):
+            return False
+        self._await(MOTION_STATUS, "motion", self.last_motion_serial)
+        return True
+
     @handler(emc.EMC_TRAJ_DELAY, table=QUEUE)
     def _delay(self, msg: emc.EMC_TRAJ_DELAY, now: float) -> bool:
         if not self._is_motion_done():
