@@ -15,12 +15,19 @@ def atomic_write_text(
 ) -> None:
     """Replace ``path`` with ``text``: write a temporary file beside it, fsync, rename.
 
-    With ``keep_backup`` the previous content is kept as ``path + '.bak'`` (LinuxCNC keeps
-    ``.var.bak`` this way).
+    With ``keep_backup`` the previous content is kept as ``path + '.bak'``, at every call
+    that finds a previous file, as LinuxCNC keeps ``.var.bak`` at every save of the .var
+    file (scripts remove it, so it must be there).
     """
     target = Path(path)
     if _has_content(target, text):
-        return  # nothing changed: no write, no fsync (the interpreter saves at every synch)
+        # nothing changed: no write, no fsync (the interpreter saves at every synch); the
+        # backup of the previous content is this same content
+        if keep_backup:
+            backup = target.with_name(target.name + ".bak")
+            if not _has_content(backup, text):
+                _copy_for_backup(target, backup)
+        return
     directory = target.parent if str(target.parent) else Path(".")
     import tempfile  # here: it costs start-up time to every process that may write a file
 

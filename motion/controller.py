@@ -464,6 +464,7 @@ class MotionController(SpindleControl, JogWheels, TeleopControl, StatusFilling):
             term=TermCond.STOP if indexer else self.term_cond,
             tolerance=self.tolerance,
             is_rapid=is_rapid,
+            tag=cmd.tag.to_bytes(),
             **indexer,
         )
         self._flush_synchronised_outputs()
@@ -493,6 +494,7 @@ class MotionController(SpindleControl, JogWheels, TeleopControl, StatusFilling):
             motion_id=self.next_motion_id,
             term=self.term_cond,
             tolerance=self.tolerance,
+            tag=cmd.tag.to_bytes(),
         )
         self._flush_synchronised_outputs()
 
@@ -511,7 +513,15 @@ class MotionController(SpindleControl, JogWheels, TeleopControl, StatusFilling):
             raise Refused(problem)
         # probe_type as in LinuxCNC: bit 1 set = away (G38.4/5), bit 0 = no error if no trip
         probe = ProbeType.AWAY if cmd.probe_type & 2 else ProbeType.TOWARD
-        self.tp.add_probe(list(end), cmd.vel, cmd.ini_maxvel, cmd.acc, self.next_motion_id, probe)
+        self.tp.add_probe(
+            list(end),
+            cmd.vel,
+            cmd.ini_maxvel,
+            cmd.acc,
+            self.next_motion_id,
+            probe,
+            tag=cmd.tag.to_bytes(),
+        )
 
     def _flush_synchronised_outputs(self) -> None:
         """M62/M64-style outputs queued with the next move take effect now (MOT-060/061)."""
@@ -779,6 +789,7 @@ class MotionController(SpindleControl, JogWheels, TeleopControl, StatusFilling):
             cmd.acc,
             motion_id=self.next_motion_id,
             retract_scale=cmd.scale if cmd.scale > 0 else 1.0,
+            tag=cmd.tag.to_bytes(),
         )
         self._is_last_move_rapid = False
 

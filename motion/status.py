@@ -12,8 +12,10 @@ runs of one status record once; ``StatusFilling.fill_status``, a part of
 controller's state.
 
 Fields motion does not own are outside every run and keep their value: ``linearUnits``,
-``angularUnits``, ``probeval``, ``tag``, the joints' soft-limit flags, the axis records and
-the RCS header (``command_type``, ``echo_serial_number``, ``status``: the command handler's).
+``angularUnits``, ``probeval``, the joints' soft-limit flags, the axis records and the RCS
+header (``command_type``, ``echo_serial_number``, ``status``: the command handler's).
+``tag``, the state tag of the move being carried out (as the move brought it from task),
+is copied in only when it changes.
 """
 
 from __future__ import annotations
@@ -111,9 +113,19 @@ class MotionStatusRuns:
             for index in range(num_spindles)
         ]
         self._io_arrays = (stat.synch_do, stat.synch_di, stat.analog_output, stat.analog_input)
+        self._record = record
+        tag_at = traj_at + traj.fields["tag"][1]
+        self._tag_bytes = slice(tag_at, tag_at + emc.StateTag.dtype.itemsize)
+        self._tag_written: bytes | None = None
         for index in range(num_joints, len(stat.joint)):
             _set_absent_joint_defaults(stat.joint[index])
         self._io_written: list[list | None] = [None] * len(self._io_arrays)
+
+    def write_tag(self, tag: bytes) -> None:
+        """``traj.tag``: a move's state tag, as it came (an empty one leaves it as it is)."""
+        if tag is not self._tag_written and tag:
+            self._record[self._tag_bytes] = tag
+            self._tag_written = tag
 
     def write_io(self, *values: list) -> None:
         """``synch_do``, ``synch_di``, ``analog_output``, ``analog_input`` from the start:
@@ -216,6 +228,7 @@ class StatusFilling:
                 False,  # homed: spindles are not homed (LinuxCNC reports the same)
             )
         runs.write_io(self.digital_out, self.digital_in, self.analog_out, self.analog_in)
+        runs.write_tag(tp.tag)
 
 
 def _set_absent_joint_defaults(record: emc.EMC_JOINT_STAT) -> None:

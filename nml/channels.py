@@ -8,6 +8,8 @@ file is parsed, not at the first write.
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 from pathlib import Path
 
 from nml import config as nml_config
@@ -80,8 +82,57 @@ def message_room(buffer: BufferConfig) -> MessageRoom | None:
 
 
 def load_config(path: str | Path | None = None) -> NmlConfig:
-    """Parse an NML file (default: ours) and check its sizes against our messages."""
-    return nml_config.load(path or DEFAULT_NML_FILE, message_room=message_room)
+    """Parse an NML file (default: ours) and check its sizes against our messages. A
+    LinuxCNC NML file gets what only our controller uses (``with_our_lines``)."""
+    config = nml_config.load(path or DEFAULT_NML_FILE, message_room=message_room)
+    return with_our_lines(config)
+
+
+MOTION_PAIR = (MOTION_COMMAND, MOTION_STATUS)
+
+
+def with_our_lines(config: NmlConfig) -> NmlConfig:
+    """``config`` with the lines of our NML file that only our controller uses, where it
+    has none: the task <-> motion pair and the P lines of our ``motion`` process.
+
+    LinuxCNC's task talks to motion through a shared-memory area motmod makes, which no NML
+    file configures, and its motion reports errors through task: its NML files
+    (linuxcnc.nml, a user's tcp.nml) name only the buffers and processes of task
+    (``emc``), iocontrol (``tool``), the UIs (``xemc``) and the server (``emcsvr``). Such a
+    file runs here unchanged: our lines are added, our master's going to the file's master
+    process(es), so the launcher creates the pair with the rest; an added P line on one of
+    the file's buffers takes a connection number that buffer does not use yet."""
+    ours = _our_config()
+    added_buffers = [name for name in MOTION_PAIR if name not in config.buffers]
+    known_processes = {p.name for p in config.processes}
+    added_lines = [
+        line
+        for line in ours.processes
+        if line.buffer in added_buffers or (line.name not in known_processes and not line.is_master)
+    ]
+    if not added_lines:
+        return config
+    masters = sorted({p.name for p in config.processes if p.is_master})
+    buffers = dict(config.buffers)
+    processes = list(config.processes)
+    for name in added_buffers:
+        buffers[name] = ours.buffers[name]
+    for line in added_lines:
+        if line.buffer not in buffers:
+            continue  # (a buffer the file lacks that is not ours to add: Nml says so)
+        if line.buffer not in added_buffers:
+            used = {p.c_num for p in processes if p.buffer == line.buffer}
+            line = dataclasses.replace(line, c_num=min(set(range(len(used) + 1)) - used))
+        if line.is_master and masters:
+            processes += [dataclasses.replace(line, name=master) for master in masters]
+        else:
+            processes.append(line)
+    return dataclasses.replace(config, buffers=buffers, processes=processes)
+
+
+@functools.cache
+def _our_config() -> NmlConfig:
+    return nml_config.load(DEFAULT_NML_FILE, message_room=message_room)
 
 
 class Nml:

@@ -46,7 +46,9 @@ Routing assumed for the messages of ``out`` (what task does with them)
   LOAD_TOOL_TABLE), EMC_COOLANT_*, EMC_AUX_INPUT_WAIT (M66; task waits for the input).
 
 Each move is preceded by EMC_TRAJ_SET_MOTION_ID(id=line) when its interpreter line
-differs from the previous move's, so motion reports the line it executes.
+differs from the previous move's, so motion reports the line it executes; and each move
+carries the interpreter's last state tag (``UPDATE_TAG``, task/interp/statetag.py), which
+motion reports while it carries the move out.
 
 World model
 -----------
@@ -70,7 +72,6 @@ Deviations from emccanon
 - An axis without a velocity (acceleration) limit (``inf``) takes no time; a move none of
   whose axes is limited moves at [TRAJ]MAX_LINEAR_VELOCITY / MAX_LINEAR_ACCELERATION
   (emccanon has no unlimited axes).
-- The state tag of each message is not filled in (the interpreter has no UPDATE_TAG).
 - Hot comments: PROBEOPEN/PROBECLOSE are supported, RPY is not; LOG* write only the log
   file (not stderr).
 - UNLOCK_ROTARY/LOCK_ROTARY (indexing rotaries), PLUGIN_CALL and IO_PLUGIN_CALL are not
@@ -79,8 +80,10 @@ Deviations from emccanon
 
 from __future__ import annotations
 
+import functools
 import math
 import os
+import struct
 from collections import deque
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -92,6 +95,7 @@ from nml import emc
 from nml.axes import NUM_AXES
 from nml.message import RCS_CMD_MSG
 from task.interp import canon as C  # noqa: N812  (C.PLANE_XY reads like CANON_PLANE_XY)
+from task.interp import statetag
 
 MM_PER_INCH = 25.4
 LINEAR_AXES = (0, 1, 2, 6, 7, 8)  # X Y Z U V W
@@ -104,6 +108,54 @@ MIN_ARC_ANGLE = 1.0e-12
 _MM_PER_UNIT = {C.UNITS_INCHES: MM_PER_INCH, C.UNITS_MM: 1.0, C.UNITS_CM: 10.0}
 # the axes of each plane: (first axis, second axis, normal axis), X=0 Y=1 Z=2
 _PLANE_AXES = {C.PLANE_XY: (0, 1, 2), C.PLANE_YZ: (1, 2, 0), C.PLANE_XZ: (2, 0, 1)}
+
+
+def _state_tag_layout() -> tuple[struct.Struct, tuple[slice, ...]]:
+    """How a tag (task/interp/statetag.py: LinuxCNC's state_tag_t order) packs into
+    ``emc.StateTag``'s bytes: the layout, and the tag's slices in the order the struct's
+    layout has its three fields (by offset: nml does not keep their declared order,
+    ``fields`` being also a name of its Struct)."""
+    parts = {
+        "fields_float": ("5f", slice(0, statetag.FLOAT_FIELDS)),
+        "fields": ("8i", slice(statetag.FLOAT_FIELDS, statetag.FLAGS)),
+        "packed_flags": ("Q", slice(statetag.FLAGS, statetag.FLAGS + 1)),
+    }
+    fields = emc.StateTag.dtype.fields
+    order = sorted(parts, key=lambda name: fields[name][1])
+    layout = struct.Struct("<" + "".join(parts[name][0] for name in order))
+    if layout.size != emc.StateTag.dtype.itemsize:
+        raise AssertionError("StateTag's layout is not LinuxCNC's state_tag_t")
+    return layout, tuple(parts[name][1] for name in order)
+
+
+_TAG_LAYOUT, (_TAG_FIRST, _TAG_SECOND, _TAG_THIRD) = _state_tag_layout()
+_TAG_SIZE = _TAG_LAYOUT.size
+# where each value _TAG_LAYOUT unpacks goes in a tag
+_TAG_POSITIONS = tuple(
+    index
+    for part in (_TAG_FIRST, _TAG_SECOND, _TAG_THIRD)
+    for index in range(part.start, part.stop)
+)
+
+
+def state_tag_bytes(tag: tuple) -> bytes:
+    """An interpreter's state tag as the bytes of ``emc.StateTag``."""
+    return _TAG_LAYOUT.pack(*tag[_TAG_FIRST], *tag[_TAG_SECOND], *tag[_TAG_THIRD])
+
+
+def state_tag_of(tag: emc.StateTag) -> tuple:
+    """The interpreter's form of the state tag a message or a status carries."""
+    values = [0] * len(_TAG_POSITIONS)
+    for index, value in zip(_TAG_POSITIONS, _TAG_LAYOUT.unpack(tag.to_bytes()), strict=True):
+        values[index] = value
+    return tuple(values)
+
+
+@functools.cache
+def _tag_offset(message: type[RCS_CMD_MSG]) -> int:
+    """Where a move message's ``tag`` starts in its bytes (written in place: assigning the
+    struct costs more than the rest of queueing the move)."""
+    return message.dtype.fields["tag"][1]
 
 
 @dataclass
@@ -238,6 +290,9 @@ class TaskCanon:
         self.is_block_delete_on = True
         self.is_optional_stop_on = True
         self._chain: list[tuple[int, list[float]]] = []  # held-back feeds: (line, end)
+        self._tag: tuple | None = None  # the interpreter's last UPDATE_TAG (statetag.py)
+        self._chain_tag: tuple | None = None  # ... when the last held-back feed was seen
+        self._tag_packed: tuple[tuple | None, bytes] = (None, bytes(_TAG_SIZE))
         self._motion_line: int | None = None  # line of the last EMC_TRAJ_SET_MOTION_ID
         # the default blending tolerance is 0.001 inch
         self.SET_MOTION_CONTROL_MODE(C.CONTINUOUS, 0.001 * MM_PER_INCH / self._mm_per_unit)
@@ -310,12 +365,28 @@ class TaskCanon:
         self._flush()
         self.out.append(msg)
 
-    def _queue_move(self, line: int, msg: RCS_CMD_MSG) -> None:
-        """Queue a move, announcing its line to motion when the line changes."""
+    def _queue_move(self, line: int, msg: RCS_CMD_MSG, tag: tuple | None = None) -> None:
+        """Queue a move with its state tag (default: the interpreter's last), announcing
+        its line to motion when the line changes."""
         if line != self._motion_line:
             self.out.append(emc.EMC_TRAJ_SET_MOTION_ID(id=line))
             self._motion_line = line
+        at = _tag_offset(type(msg))
+        msg.byte_view()[at : at + _TAG_SIZE] = self._packed_tag(self._tag if tag is None else tag)
         self.out.append(msg)
+
+    def UPDATE_TAG(self, tag: tuple) -> None:
+        """The interpreter's modal state (task/interp/statetag.py), which the moves queued
+        from now on carry to motion, as emccanon's UPDATE_TAG."""
+        self._tag = tag
+
+    def _packed_tag(self, tag: tuple | None) -> bytes:
+        """``tag`` as StateTag bytes (packed once per tag: many moves may share one)."""
+        packed_from, packed = self._tag_packed
+        if tag is not packed_from:
+            packed = bytes(_TAG_SIZE) if tag is None else state_tag_bytes(tag)
+            self._tag_packed = (tag, packed)
+        return packed
 
     def _error(self, text: str) -> None:
         """emccanon's CANON_ERROR: a message for the operator's error channel."""
@@ -401,6 +472,7 @@ class TaskCanon:
         if self._chain and not self._is_linkable(end):
             self._flush()
         self._chain.append((line, end))
+        self._chain_tag = self._tag  # (the joined move carries the last segment's tag)
         if not self._is_naivecam_on() or end[3:] != self.end_point[3:]:
             self._flush()
 
@@ -430,6 +502,7 @@ class TaskCanon:
             return
         line, end = self._chain[-1]
         self._chain.clear()
+        tag = self._chain_tag
         limits = self._straight(end)
         vel = self._feed_velocity(limits)
         if vel and limits.acc:
@@ -442,7 +515,7 @@ class TaskCanon:
                 feed_mode=self.feed_mode,
                 indexer_jnum=-1,
             )
-            self._queue_move(line, msg)
+            self._queue_move(line, msg, tag)
         self.end_point = end
 
     def _drop(self) -> None:

@@ -61,6 +61,8 @@ from nml.message import RCS_STATUS, MessageKind, Receiver, Requires
 from nml.outbox import Outbox
 from nml.safety import SafetyLink
 from nml.shmem import LOCK_HELD_REPORT_S
+from task.canon import state_tag_of
+from task.interp import statetag
 from task.interp.errors import (
     INTERP_ENDFILE,
     INTERP_EXECUTE_FINISH,
@@ -669,8 +671,26 @@ class Task:
                 return  # done already, from the board
             self.abort_handled = cmd.request
         self._abort_all()
+        if self.mode == MODE.AUTO:
+            self._restore_interpreter_state()
         self.operator_text("task: aborted")  # an abort is always reported (TASK-019)
         self._run_on_abort(EMC_ABORT_TASK_ABORT)
+
+    def _restore_interpreter_state(self) -> None:
+        """After a program's abort: the interpreter read ahead of motion, so its modes
+        (coordinate system, units, feed ...) are those of a line never carried out; bring
+        them back to those of the move motion was on (its state tag), as LinuxCNC's task
+        does (emcTaskStateRestore). The G-code that does it queues the canon's messages
+        (a G55's EMC_TRAJ_SET_G5X ...), carried out as an MDI line's are."""
+        tag = state_tag_of(self.stat.motion.traj.tag)
+        self.queue.line = 0
+        try:
+            with self.watchdog:
+                self.canon.set_status(self.stat)
+                if self.interp.restore_from_tag(tag):
+                    self.canon.FINISH()
+        except InterpError as exc:
+            self.operator_error(str(exc))
 
     def _abort_all(self) -> None:
         """Abort as LinuxCNC's task does on STOP, E-stop, machine off and run-time errors:
@@ -921,6 +941,20 @@ class Task:
             return not self._send_io(msg)
         return True
 
+    @handler(emc.EMC_MOTION_SET_DOUT, emc.EMC_MOTION_SET_AOUT, table=QUEUE)
+    def _output(self, msg: emc.EMC_MOTION_SET_DOUT | emc.EMC_MOTION_SET_AOUT, now: float) -> bool:
+        """M62/M63/M67 go with the next move. An immediate output (M64, M65, M68: ``now``)
+        is set once all before it is done, and task waits for motion's answer, as
+        LinuxCNC's task waits for each command it gives motion: the status task publishes
+        next, the one echoing the MDI line that set it, already shows it. (A refusal
+        stops the run through _check_motion_errors.)"""
+        if not msg.now:
+            return self._pass_on(msg, now)
+        if not self._is_everything_done() or not self._pass_on(msg, now):
+            return False
+        self._await(MOTION_STATUS, "motion", self.last_motion_serial)
+        return True
+
     @handler(emc.EMC_TRAJ_DELAY, table=QUEUE)
     def _delay(self, msg: emc.EMC_TRAJ_DELAY, now: float) -> bool:
         if not self._is_motion_done():
@@ -946,13 +980,21 @@ class Task:
         self.is_reading_done = True
         return True
 
-    @handler(emc.EMC_TRAJ_SET_G5X, emc.EMC_TRAJ_SET_G92, table=QUEUE)
-    def _origin(self, _msg: emc.NMLmsg, _now: float) -> bool:
-        return True  # offsets are task's: EMC_STAT shows them from the interpreter's parameters
-
-    @handler(emc.EMC_TRAJ_SET_ROTATION, table=QUEUE)
-    def _rotation(self, msg: emc.EMC_TRAJ_SET_ROTATION, _now: float) -> bool:
-        self.stat.task.rotation_xy = msg.rotation
+    @handler(emc.EMC_TRAJ_SET_G5X, emc.EMC_TRAJ_SET_G92, emc.EMC_TRAJ_SET_ROTATION, table=QUEUE)
+    def _origin(self, msg: emc.NMLmsg, _now: float) -> bool:
+        """G54..G59.3, G92 and G10's changes of the active system, and their XY rotation:
+        they are task's (motion works in machine coordinates), shown in EMC_STAT once the
+        moves before them are done, as LinuxCNC's task applies them: the status shows the
+        origin of the move being carried out, not of a line the interpreter read ahead."""
+        if not self._is_motion_done():
+            return False
+        task = self.stat.task
+        if isinstance(msg, emc.EMC_TRAJ_SET_G5X):
+            task.g5x_offset, task.g5x_index = msg.origin, msg.g5x_index
+        elif isinstance(msg, emc.EMC_TRAJ_SET_G92):
+            task.g92_offset = msg.origin
+        else:
+            task.rotation_xy = msg.rotation
         return True
 
     @handler(emc.EMC_TRAJ_SET_OFFSET, table=QUEUE)
@@ -1204,25 +1246,29 @@ class Task:
         task.readLine = getattr(interp, "sequence_number", 0)
         task.queuedMDIcommands = len(self.mdi_queue)
         task.delayLeft = max(0.0, self.delay_until - time.monotonic())
-        codes = interp.active_g_codes()
-        task.activeGCodes[: len(codes)] = codes
-        codes = interp.active_m_codes()
-        task.activeMCodes[: len(codes)] = codes
-        settings = interp.active_settings()
+        g_codes, m_codes, settings = self._active_modes()
+        task.activeGCodes[: len(g_codes)] = g_codes
+        task.activeMCodes[: len(m_codes)] = m_codes
         task.activeSettings[: len(settings)] = settings
         task.programUnits = interp.length_units if hasattr(interp, "length_units") else 0
-        params = interp.parameters
-        system = int(params[5220]) or 1
-        base = 5201 + 20 * system
-        task.g5x_offset.set(params[base : base + 9])
-        task.g5x_index = system
-        task.g92_offset.set(params[5211:5220])
         task.ini_filename = emc.fit_text(self.ini.path)
         self.publish_due = time.monotonic() + PUBLISH_AT_LEAST_S
         try:
             self.nml[EMC_STATUS].write(self.stat)
         except NmlError as exc:
             log.error("cannot publish status: %s", exc)
+
+    def _active_modes(self) -> tuple[list[int], list[int], list[float]]:
+        """The active G codes, M codes and settings EMC_STAT shows: while a program runs,
+        those of the move motion is carrying out (its state tag; the interpreter reads
+        ahead), else, or before the first tagged move, the interpreter's (LinuxCNC's
+        emcTaskUpdate)."""
+        if self.run is Run.PROGRAM:
+            tag = state_tag_of(self.stat.motion.traj.tag)
+            if statetag.is_valid(tag):
+                return statetag.active_modes(tag)
+        interp = self.interp
+        return interp.active_g_codes(), interp.active_m_codes(), interp.active_settings()
 
     # ================================================================ messages
     def operator_error(self, text: str) -> None:

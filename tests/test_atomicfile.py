@@ -27,6 +27,27 @@ def test_unchanged_content_is_not_rewritten(tmp_path: Path) -> None:
     assert target.stat().st_ino != inode and target.read_text() == "T1 P2\n"
 
 
+def test_every_save_with_a_backup_leaves_the_previous_content_as_bak(tmp_path: Path) -> None:
+    """As LinuxCNC's save of the .var file (a link of the old file, at every save): the
+    first save has no previous file, and an unchanged save's previous content is its own;
+    the file itself is still not rewritten then."""
+    target, backup = tmp_path / "sim.var", tmp_path / "sim.var.bak"
+    atomic_write_text(target, "5220\t1.000000\n", keep_backup=True)
+    assert not backup.exists()
+    inode = target.stat().st_ino
+    atomic_write_text(target, "5220\t1.000000\n", keep_backup=True)
+    assert backup.read_text() == "5220\t1.000000\n"
+    assert target.stat().st_ino == inode
+    atomic_write_text(target, "5220\t2.000000\n", keep_backup=True)
+    assert backup.read_text() == "5220\t1.000000\n"
+    atomic_write_text(target, "5220\t2.000000\n", keep_backup=True)
+    assert backup.read_text() == "5220\t2.000000\n"
+    backup.unlink()  # (a script removed it)
+    atomic_write_text(target, "5220\t2.000000\n", keep_backup=True)
+    assert backup.read_text() == "5220\t2.000000\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["sim.var", "sim.var.bak"]
+
+
 def test_a_new_file_gets_the_umask_mode_not_0600(tmp_path: Path) -> None:
     old = os.umask(0o027)
     try:

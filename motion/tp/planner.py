@@ -146,6 +146,7 @@ class Move:
     is_waiting_for_index: bool = False  # first move of a G33 chain: starts at the index
     rigid_tap: RigidTap | None = None
     indexer_joint: int = -1  # a locking indexer's move: starts and ends at rest (motion/indexer.py)
+    tag: bytes = b""  # the interpreter's state at the move (a StateTag), reported while it runs
 
 
 class TrajectoryPlanner:
@@ -177,6 +178,7 @@ class TrajectoryPlanner:
         self.rapid_scale = 1.0
         self.probe_input = False  # set by the caller every period
         self.motion_id = 0
+        self.tag = b""  # the state tag of the move being carried out (of the last one, at rest)
         self.probe_tripped = False
         self.probe_pos = np.zeros(NUM_AXES)
         self.error: str | None = None  # taken by the caller with take_error()
@@ -359,12 +361,15 @@ class TrajectoryPlanner:
         is_rapid: bool = False,
         probe: ProbeType | None = None,
         indexer_joint: int = -1,
+        tag: bytes = b"",
     ) -> None:
         """Queue a straight move to ``end`` (SET_LINE, MOT-053); ``indexer_joint``: the
-        locking indexer joint it turns (the move starts from rest, see motion/indexer.py)."""
+        locking indexer joint it turns (the move starts from rest, see motion/indexer.py);
+        ``tag``: what ``self.tag`` reports while the move runs (every add_* takes one)."""
         end_v = self._check_target(end)
         move = self._new_move(motion_id, vel, ini_maxvel, acc, term, tolerance, is_rapid, probe)
         move.indexer_joint = indexer_joint
+        move.tag = tag
         piece = LinePiece(move, self._end, end_v)
         if piece.length <= EPS:
             return  # nothing to do: LinuxCNC drops zero-length moves too
@@ -378,6 +383,7 @@ class TrajectoryPlanner:
         acc: float,
         motion_id: int = 0,
         retract_scale: float = 1.0,
+        tag: bytes = b"",
     ) -> None:
         """Queue a rigid tap (G33.1, EMC_TRAJ_RIGID_TAP): in to ``end`` following the
         spindle at the synchronisation's feed per revolution, spindle reversed (its speed
@@ -391,6 +397,7 @@ class TrajectoryPlanner:
         start = self._end.copy()
         term = TermCond.STOP
         move = self._new_move(motion_id, ini_maxvel, ini_maxvel, acc, term, 0.0, False, None)
+        move.tag = tag
         piece = LinePiece(move, start, end_v)
         if piece.length <= EPS:
             return
@@ -410,13 +417,14 @@ class TrajectoryPlanner:
         motion_id: int = 0,
         probe: ProbeType = ProbeType.TOWARD,
         is_error_without_trip: bool = True,
+        tag: bytes = b"",
     ) -> None:
         """Queue a probe move (PROBE, MOT-056): it stops on the probe edge, records the
         position and empties the queue. The tripped flag is cleared here (MOT-057).
         Reaching the end without a trip is an error (G38.2/G38.4) unless
         ``is_error_without_trip`` is false (G38.3/G38.5)."""
         self.probe_tripped = False
-        self.add_line(end, vel, ini_maxvel, acc, motion_id, TermCond.STOP, probe=probe)
+        self.add_line(end, vel, ini_maxvel, acc, motion_id, TermCond.STOP, probe=probe, tag=tag)
         if self._moves and self._moves[-1].probe is not None:
             self._moves[-1].is_error_without_trip = is_error_without_trip
 
@@ -432,6 +440,7 @@ class TrajectoryPlanner:
         motion_id: int = 0,
         term: TermCond = TermCond.BLEND,
         tolerance: float = 0.0,
+        tag: bytes = b"",
     ) -> None:
         """Queue an arc or helix (SET_CIRCLE, MOT-054): counter-clockwise about ``normal``
         through ``centre`` (XYZ), plus ``turns`` full turns; A B C U V W move linearly."""
@@ -445,6 +454,7 @@ class TrajectoryPlanner:
         if int(turns) != turns or turns < 0:
             raise ValueError(f"circle turns must be a whole number >= 0, got {turns}")
         move = self._new_move(motion_id, vel, ini_maxvel, acc, term, tolerance, False, None)
+        move.tag = tag
         piece = circle_piece(move, self._end, end_v, centre_v, normal_v, int(turns))
         move.arc = piece
         self._append(move, piece, ini_maxvel, acc)
@@ -1010,6 +1020,7 @@ class TrajectoryPlanner:
         self.pos = p.point(u)
         self.vel = abs(tap.vel)
         self.motion_id = move.motion_id
+        self.tag = move.tag
         self.distance_to_go = abs(u) if tap.state else tap.depth - u
         if not tap.is_done:
             return self.pos
@@ -1068,6 +1079,7 @@ class TrajectoryPlanner:
         self.vel = v_new
         self.pos = p.point(s)
         self.motion_id = p.move.motion_id
+        self.tag = p.move.tag
         self.distance_to_go = max(p.move.end_s - (p.s0 + s), 0.0)
         if v_new == 0.0 and self._is_stopping:
             if self._is_aborting:

@@ -51,7 +51,11 @@ _AXIS_NAMES = {
 
 
 class Canon(Protocol):
-    """Canonical calls; positions are program units with offsets applied by the canon."""
+    """Canonical calls; positions are program units with offsets applied by the canon.
+
+    Optional: ``UPDATE_TAG(tag)``, the interpreter's modal state for the moves that follow
+    (task/interp/statetag.py); only a canon that has it is given tags (task's does).
+    """
 
     # representation
     def SET_XY_ROTATION(self, t: float) -> None: ...

@@ -79,6 +79,11 @@ class CyclesMixin:
                 if getattr(block, letter + "_flag"):
                     raise InterpError(f"Cannot put {article} in a canned cycle in the {name} plane")
             raise InterpError(f"Canned cycles in the {name} plane are not supported")
+        # the tag shows the cycle as the motion mode (as LinuxCNC's), though the mode
+        # changes only once the cycle is converted
+        saved_mode, self.motion_mode = self.motion_mode, motion
+        self.write_canon_state_tag(block)
+        self.motion_mode = saved_mode
         self._convert_cycle_plane(motion, block, plane)
         self.cycle_l = block.l_number
         self.cycle_r = block.r_number

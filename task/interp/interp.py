@@ -178,6 +178,7 @@ from .remap import (
     parse_remaps,
 )
 from .stack import error_stack
+from .statetag import state_tag
 from .tools import ToolsMixin
 
 LOAD_CHUNK_BYTES = 1 << 18  # (about 8,000 lines of G-code)
@@ -214,6 +215,8 @@ class Interpreter(
         self.canon = canon
         self.hal = hal
         canon.linetext = self._get_linetext
+        # a canon that takes state tags (task's) gets one before each move (statetag.py)
+        self._update_tag: Callable[[tuple], object] | None = getattr(canon, "UPDATE_TAG", None)
         self.ini = ini
         self.parameter_file = parameter_file
         self.task = task
@@ -272,6 +275,12 @@ class Interpreter(
 
     def _get_linetext(self) -> str:
         return self.linetext
+
+    def write_canon_state_tag(self, block: Block | None) -> None:
+        """Give the canon the modal state now, for the moves it queues next (LinuxCNC's
+        write_canon_state_tag: at a move, and once a block has made all its changes)."""
+        if self._update_tag is not None:
+            self._update_tag(state_tag(self, block))
 
     def record_error_stack(self) -> None:
         """Make errors carry LinuxCNC's function stack (``rs274 -s``, see stack.py).
@@ -1017,6 +1026,7 @@ class Interpreter(
         self.cycle_il_flag = False
         self.arc_not_allowed = False
         self.motion_mode = move
+        self.write_canon_state_tag(None)
         if move == G_0:
             self.canon.STRAIGHT_TRAVERSE(self.sequence_number, *ends)
         else:
@@ -1402,6 +1412,7 @@ class Interpreter(
                 return status
         if self.probe_flag or self.input_flag or self.toolchange_flag:
             return INTERP_EXECUTE_FINISH
+        self.write_canon_state_tag(block)
         return INTERP_OK
 
     def execute_block_steps(self, block: Block) -> int:
@@ -1458,6 +1469,7 @@ class Interpreter(
                 return status
         if self.probe_flag or self.input_flag or self.toolchange_flag:
             return INTERP_EXECUTE_FINISH
+        self.write_canon_state_tag(block)
         return INTERP_OK
 
     def _spindle_mode_step(self, block: Block) -> None:

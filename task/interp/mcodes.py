@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from . import canon as C  # noqa: N812  (C.PLANE_XY reads like CANON_PLANE_XY)
+from . import statetag
 from .block import (
     G_7,
     G_8,
@@ -250,6 +251,7 @@ class MCodesMixin:
             or (not block.p_flag and not block.e_flag)
         ):
             raise InterpError("Need to have either a valid P or a valid E word with M66")
+        self.write_canon_state_tag(block)
         if block.p_flag:
             wait_type = round_to_int(block.l_number) if block.l_flag else 0
             timeout = block.q_number if block.q_number > 0 else 0.0
@@ -377,6 +379,35 @@ class MCodesMixin:
         for part in cmd.split("\n"):
             if part:
                 self._execute_restore(part, None)
+
+    def restore_from_tag(self, tag: tuple) -> bool:
+        """After a program's abort: bring the modes back to those of the move motion was
+        carrying out (its state tag, statetag.py), which the interpreter, reading ahead,
+        had left behind, as LinuxCNC's restore_from_tag: G20/G21 first, then the other
+        modal groups that differ (cutter compensation always off, never the motion mode),
+        feed, speed and G64's tolerances, executed as G-code so the canon hears of them;
+        M codes stay. False (nothing done) for a tag that is not restorable: invalid, or
+        taken inside a subroutine or a remap."""
+        if not statetag.is_restorable(tag):
+            return False
+        self.input_flag = self.toolchange_flag = self.probe_flag = False
+        saved_g, _saved_m, saved_settings = statetag.active_modes(tag)
+        saved_g[4] = G_40
+        current_g = self.active_g_codes()
+        lines = []
+        if current_g[5] != saved_g[5]:
+            lines.append(f"G{saved_g[5] // 10}")
+        lines += _gen_settings(current_g, saved_g, saved_settings).split("\n")
+        for line in lines:
+            if not line:
+                continue
+            try:
+                self.execute(line)
+            except InterpError as error:
+                raise InterpError(
+                    f"Failed to restore interp state on abort '{line}': {error.message}"
+                ) from None
+        return True
 
     def _execute_restore(self, command: str, message: str | None) -> None:
         try:

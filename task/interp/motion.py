@@ -107,6 +107,7 @@ class MotionMixin:
         elif motion in (G_70, G_71, G_71_1, G_71_2, G_72, G_72_1, G_72_2):
             self.convert_g7x(block)
         elif motion in (G_5, G_5_1):
+            self.write_canon_state_tag(block)
             self.convert_spline(motion, block)
         elif motion == G_5_2:
             self.convert_nurbs(motion, block)
@@ -130,6 +131,7 @@ class MotionMixin:
         ends = self.find_ends(block)
         if move == G_1 and self.feed_mode == INVERSE_TIME:
             self.inverse_time_rate_straight(ends, block)
+        self.write_canon_state_tag(block)
         if self.cutter_comp_side and self.cutter_comp_radius > 0.0:
             if block.g_modes[GM_MODAL_0] == G_53:
                 raise InterpError("Cannot use g53 with cutter radius comp")
@@ -645,6 +647,7 @@ class MotionMixin:
                 raise InterpError("X and z words missing for arc in xz plane")
         ends = self.find_ends(block)
         self.motion_mode = move
+        self.write_canon_state_tag(block)
         if plane == C.PLANE_XY:
             axes = (0, 1, 2)
             offsets = (block.i_number, block.j_number)
