@@ -272,8 +272,9 @@ def a_program_runs_with_progress_and_an_estimate(  # type: ignore[no-untyped-def
 def the_machines_spindle_and_coolant_beside_the_modal_state(  # type: ignore[no-untyped-def]
     page, machine: Machine, shots: Path
 ) -> None:
-    """During the long feed of cut.ngc the interpreter has read "M5 M9" already: the
-    machine's spindle and flood are still on, and the page says both."""
+    """During the long feed of cut.ngc the interpreter has read "M5 M9" already; the
+    machine's spindle and flood are still on, and the page says so. The modal codes are
+    those of the line being cut (LinuxCNC's state tags: M3 M8), never the read-ahead's."""
     page.select_option("#program-list", "cut.ngc")
     page.click("#program-open")
     expect(page.locator("#analysis")).to_contain_text("estimated run time")
@@ -283,8 +284,8 @@ def the_machines_spindle_and_coolant_beside_the_modal_state(  # type: ignore[no-
     expect(page.locator("#state")).to_have_text("RUNNING")  # never READING or WAITING
     expect(page.locator("#now-spindle")).to_have_text("S 1000 rpm FWD")
     expect(page.locator("#now-coolant")).to_have_text("flood on")
-    expect(page.locator("#mcodes")).to_contain_text("M5")
-    expect(page.locator("#mcodes")).to_contain_text("M9")
+    expect(page.locator("#mcodes")).to_contain_text("M3")
+    expect(page.locator("#mcodes")).to_contain_text("M8")
     expect(page.locator("#progress-text")).to_contain_text(re.compile(r"\d+\.\d %.*elapsed.*left"))
     expect(page.locator(".listing-row.current .number")).to_have_text("4")
     page.screenshot(path=str(shots / "state-running.png"))
