@@ -158,7 +158,10 @@ def test_mqtt_publisher_publishes_hal_values_as_linuxcnc_s(rig: Rig) -> None:
         command = cnc.command()
         home_and_move(command, "G0 X1 Y0 Z0")  # as LinuxCNC's tests/mqtt/display.py
         last = hal.get_value("mqtt-publisher.lastpublish")
-        data = listener.wait_for(PUBLISHER_PREFIX, lambda d: d["x-pos"] == 1.0)
+        data = listener.wait_for(  # at rest: halui's feedback pin follows a cycle later
+            PUBLISHER_PREFIX,
+            lambda d: d["x-pos"] == 1.0 and d.get("halui.axis.x.pos-feedback") == 1.0,
+        )
         # signals and pins by name, bits as booleans, the period added; missing keys left out
         assert data["y-pos"] == 0.0
         assert data["halui.axis.x.pos-feedback"] == 1.0
