@@ -425,11 +425,8 @@ class TeleopControl:
     def _is_teleop_resting(self) -> bool:
         """At rest with nothing asked of teleop (no jog, no vector, no external offset):
         a period would change nothing (most periods of a homed machine at rest)."""
-        vector = self.teleop
-        return (
-            not self.eoffsets.planners
-            and not any(p.is_active or p.vel for p in self.axis_planners)
-            and not (vector.target_vel.any() or vector.vel.any())
+        return not (
+            self.eoffsets.planners or self.teleop.target_vel.any() or self._is_teleop_moving()
         )
 
     def _is_teleop_moving(self) -> bool:
