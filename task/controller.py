@@ -168,8 +168,11 @@ class Task:
             writable_dirs=_writable_dirs(ini, self.setup),
         )
         self.canon = (canon_factory or TaskCanon)(canon_setup)
-        # what the canon queues, with line numbers (it may hold INIT_CANON's settings already)
-        self.queue = self.canon.out = LineQueue(self.canon.out)
+        # what the canon queues, with line numbers. It holds INIT_CANON's blending already,
+        # which motion starts with itself (motion/motmod.py): not sent (LinuxCNC's task
+        # sends it, unless an E-stop reset comes first and drops it)
+        initial = [m for m in self.canon.out if not isinstance(m, emc.EMC_TRAJ_SET_TERM_COND)]
+        self.queue = self.canon.out = LineQueue(initial)
         self.interp = Interpreter(
             self.canon,
             ini=ini,
@@ -227,9 +230,21 @@ class Task:
 
     # ================================================================ main loop
     def start(self) -> None:
-        """Tell motion the machine's limits and where it was, then publish the first status."""
+        """Tell motion the machine's limits and where it was, put the machine in E-stop
+        (as LinuxCNC's task starts: motion and the spindles stopped, motion off, the
+        VOLATILE_HOME joints unhomed, joint mode), run the startup code, then publish
+        the first status."""
         for msg in self.setup.motion_init_messages() + self._saved_positions():
             self._send_motion(msg)
+        self._await(MOTION_STATUS, "motion", self.last_motion_serial, timeout=5.0)
+        self.refresh()  # (motion's spindles)
+        # (what the interpreter queued as it started stays queued: offsets, ...)
+        self._abort_motion()
+        self._stop_spindles()
+        self._send_motion(emc.EMC_TRAJ_DISABLE())
+        self._send_io(emc.EMC_AUX_ESTOP_ON())
+        self._unhome_volatile_joints()
+        self._send_motion(emc.EMC_TRAJ_SET_MODE(mode=emc.EMC_TRAJ_MODE_ENUM.FREE))
         self._await(MOTION_STATUS, "motion", self.last_motion_serial, timeout=5.0)
         self.refresh()
         self._run_startup_code()
@@ -423,7 +438,8 @@ class Task:
                     "cannot reset E-stop: the E-stop chain (iocontrol.0.emc-enable-in) is open"
                 )
             self._abort_all()
-            self._send_motion(emc.EMC_TRAJ_DISABLE())
+            if self.stat.motion.traj.enabled:  # (off in E-stop: only as a safeguard)
+                self._send_motion(emc.EMC_TRAJ_DISABLE())
             self.state = STATE.ESTOP_RESET
         elif target == STATE.ON:
             if self.state == STATE.ESTOP:
@@ -435,6 +451,7 @@ class Task:
                 raise Refused("cannot turn the machine off while in E-stop (reset it first)")
             self._abort_all()
             self._send_motion(emc.EMC_TRAJ_DISABLE(), is_waiting=True)
+            self._unhome_volatile_joints()
             self.state = STATE.OFF
         else:
             raise Refused(f"unknown machine state {target}")
@@ -449,7 +466,13 @@ class Task:
         if not is_braking:
             self._send_motion(emc.EMC_TRAJ_DISABLE())
             self._send_io(emc.EMC_AUX_ESTOP_ON())
+            self._unhome_volatile_joints()
         self.state = STATE.ESTOP
+
+    def _unhome_volatile_joints(self) -> None:
+        """[JOINT_n]VOLATILE_HOME joints lose their home with E-stop and machine off, as
+        in LinuxCNC (motion off: sent after EMC_TRAJ_DISABLE)."""
+        self._send_motion(emc.EMC_JOINT_UNHOME(joint=-2))
 
     @handler(emc.EMC_TASK_SET_MODE)
     def _set_mode(self, cmd: emc.EMC_TASK_SET_MODE) -> None:
@@ -697,13 +720,17 @@ class Task:
         as ``_abort``, and every spindle stops and iocontrol turns the coolant off and
         drops any tool-change handshake (emcIoAbort, emcSpindleAbort)."""
         self._abort()
-        for spindle in range(max(self.stat.motion.traj.spindles, 1)):
-            self._send_motion(emc.EMC_SPINDLE_OFF(spindle=spindle))
+        self._stop_spindles()
         self._send_io(emc.EMC_TOOL_ABORT())
 
+    def _stop_spindles(self) -> None:
+        for spindle in range(max(self.stat.motion.traj.spindles, 1)):
+            self._send_motion(emc.EMC_SPINDLE_OFF(spindle=spindle))
+
     def _abort(self) -> None:
-        """Stop motion along the path, forget what was queued (LinuxCNC's emcTaskAbort)."""
-        self._send_motion(emc.EMC_TRAJ_ABORT())
+        """Stop motion along the path and every jog, forget what was queued (LinuxCNC's
+        emcTaskAbort)."""
+        self._abort_motion()
         if self.stat.io.status == RCS_STATUS.EXEC:
             self._send_io(emc.EMC_TOOL_ABORT())
         self.queue.clear()
@@ -720,6 +747,10 @@ class Task:
         self.input_wait = None
         self.pending_serial = 0
         self.idle_reading_s = 0.0
+
+    def _abort_motion(self) -> None:
+        """Stop motion along the path and every jog (LinuxCNC's emcMotionAbort)."""
+        self._send_motion(emc.EMC_MOTION_ABORT())
 
     def _run_on_abort(self, reason: int) -> None:
         """[RS274NGC]ON_ABORT_COMMAND (e.g. ``O <on_abort> call``) after an abort or an
@@ -929,6 +960,9 @@ class Task:
             return True
         if msg.RECEIVER is Receiver.MOTION:
             motion = self.stat.motion
+            if isinstance(msg, emc.MOVES_WITH_MOTION_ID) and not motion.traj.enabled:
+                self._refuse_move_with_motion_off()
+                return True
             in_flight = self.last_motion_serial - motion.echo_serial_number
             if motion.traj.queueFull or in_flight >= MAX_MOTION_IN_FLIGHT:
                 return False
@@ -954,6 +988,17 @@ class Task:
             return False
         self._await(MOTION_STATUS, "motion", self.last_motion_serial)
         return True
+
+    def _refuse_move_with_motion_off(self) -> None:
+        """A queued move with motion off (the startup code's, in E-stop): motion would
+        refuse it, and LinuxCNC's task then drops what is queued. Said, and dropped
+        without sending anything (nothing reached motion that needs stopping)."""
+        text = "cannot move with the machine off: the queued moves and what follows are dropped"
+        if self.run is not Run.IDLE:
+            self._program_error(text)
+            return
+        self.operator_error(text)
+        self.queue.clear()
 
     @handler(emc.EMC_TRAJ_DELAY, table=QUEUE)
     def _delay(self, msg: emc.EMC_TRAJ_DELAY, now: float) -> bool:
@@ -1184,6 +1229,7 @@ class Task:
         if self.state != STATE.ESTOP and self.stat.io.aux.estop:
             self._abort_all()
             self._send_motion(emc.EMC_TRAJ_DISABLE())
+            self._unhome_volatile_joints()
             self.state = STATE.ESTOP
             self.operator_error("E-stop: the E-stop chain opened (iocontrol.0.emc-enable-in)")
 
