@@ -192,7 +192,8 @@ class Task:
         self.delay_until = 0.0
         self.input_wait: tuple[int, float] | None = None  # an M66 under way: (mode, deadline)
         self.mdi_queue: deque[tuple[int, str]] = deque()
-        self.pending_serial = 0  # a command still running (MDI), answered DONE when finished
+        # a command still running (MDI, a program run), answered DONE when finished
+        self.pending_serial = 0
         self.last_motion_serial = 0
         self.last_io_serial = 0
         self.checked_motion_serial = 0
@@ -377,11 +378,19 @@ class Task:
         """Carry out one command and answer it (EXEC, then DONE or ERROR)."""
         stat = self.stat
         echo(stat, cmd, RCS_STATUS.EXEC)
+        serial = cmd.serial_number  # (a command passed on to motion gets motion's number)
+        sent_before = self.last_motion_serial
         answer = carry_out("task", self._carry_out, cmd, expected=(InterpError, ValueError))
+        if self.last_motion_serial != sent_before:
+            # as LinuxCNC's task, which waits for motion to take each command it sends: a
+            # command is answered once motion has what it sent (motion says why it refuses)
+            self._await(MOTION_STATUS, "motion", self.last_motion_serial)
+        # (echoed again: an abort it made may have answered an earlier running command)
+        echo(stat, cmd, answer.status)
+        stat.echo_serial_number = serial
         if answer.status == RCS_STATUS.EXEC:  # still running: answered when it finishes
-            self.pending_serial = cmd.serial_number
+            self.pending_serial = serial
             return
-        stat.status = answer.status
         if answer.reason is not None:
             self.operator_error(answer.reason)
         self.refresh()
@@ -450,7 +459,7 @@ class Task:
             if self.state == STATE.ESTOP:
                 raise Refused("cannot turn the machine off while in E-stop (reset it first)")
             self._abort_all()
-            self._send_motion(emc.EMC_TRAJ_DISABLE(), is_waiting=True)
+            self._send_motion(emc.EMC_TRAJ_DISABLE())
             self._unhome_volatile_joints()
             self.state = STATE.OFF
         else:
@@ -483,6 +492,16 @@ class Task:
             return
         if self.run is Run.PROGRAM:
             raise Refused("cannot change mode while a program runs (abort it first)")
+        if mode in (MODE.AUTO, MODE.MDI):
+            # as LinuxCNC's task: coordinated mode at once, then an abort (what ran in the
+            # other mode stops); not while jogging, which LinuxCNC ignores the change for
+            if self.stat.motion.jogging_active:
+                raise Refused("cannot change mode while jogging")
+            self._send_motion(emc.EMC_TRAJ_SET_MODE(mode=emc.EMC_TRAJ_MODE_ENUM.COORD))
+            if self.run is Run.IDLE:  # (what waits in the queue, a restore, stays)
+                self._abort_motion()
+            else:
+                self._abort()
         if mode == MODE.MANUAL:
             # manual mode jogs world axes (teleop) once every joint is homed, else joints
             # (free), as LinuxCNC's emcTaskSetMode; asked again (after homing) it switches,
@@ -507,9 +526,6 @@ class Task:
 
     def _ensure_coordinated(self) -> None:
         """Programs and MDI need coordinated mode, which needs homed joints (TASK-016)."""
-        traj = self.stat.motion.traj
-        if traj.mode == emc.EMC_TRAJ_MODE_ENUM.COORD:
-            return
         joints = self.stat.motion.joint
         is_forced = self.setup.is_homing_forced or self.is_homing_required
         if is_forced and not all(joints[i].homed for i in range(len(self.setup.joints))):
@@ -518,6 +534,8 @@ class Task:
                     "all joints must be homed first (the last run did not save positions)"
                 )
             raise Refused("all joints must be homed first ([TRAJ]NO_FORCE_HOMING is not set)")
+        if self.stat.motion.traj.mode == emc.EMC_TRAJ_MODE_ENUM.COORD:
+            return  # (since the switch to Auto or MDI mode, as a rule)
         self._order(self._send_motion, emc.EMC_TRAJ_SET_MODE(mode=emc.EMC_TRAJ_MODE_ENUM.COORD))
 
     # ---------------------------------------------------------------- MDI and programs
@@ -580,7 +598,7 @@ class Task:
         self.file = ""
 
     @handler(emc.EMC_TASK_PLAN_RUN)
-    def _run_program(self, cmd: emc.EMC_TASK_PLAN_RUN) -> None:
+    def _run_program(self, cmd: emc.EMC_TASK_PLAN_RUN) -> str:
         if not self.file:
             raise Refused("no program open (program_open first)")
         if self.run is not Run.IDLE:
@@ -609,6 +627,7 @@ class Task:
         self.skipped_tool_change = None
         self.furthest_line = 0
         self.is_stepping = False
+        return RUNNING  # answered when the program ends, as LinuxCNC's (wait_complete waits)
 
     @handler(emc.EMC_TASK_PLAN_PAUSE)
     def _pause(self, _cmd: emc.NMLmsg) -> None:
@@ -693,6 +712,9 @@ class Task:
             if cmd.request <= self.abort_handled:
                 return  # done already, from the board
             self.abort_handled = cmd.request
+        # as LinuxCNC's task: the abort, then motion aborted once more (and the spindles
+        # stopped) before the interpreter's state is restored
+        self._abort()
         self._abort_all()
         if self.mode == MODE.AUTO:
             self._restore_interpreter_state()
@@ -745,7 +767,7 @@ class Task:
         self.is_waiting_for_synch = False
         self.delay_until = 0.0
         self.input_wait = None
-        self.pending_serial = 0
+        self._answer_pending(RCS_STATUS.DONE)  # (stopped: done, as LinuxCNC's status says)
         self.idle_reading_s = 0.0
 
     def _abort_motion(self) -> None:
@@ -921,9 +943,7 @@ class Task:
         )
         self.operator_error(f"{text}{where}")
         self.stat.task.interpreter_errcode = 1
-        if self.pending_serial:
-            self.stat.echo_serial_number = self.pending_serial
-            self.stat.status = RCS_STATUS.ERROR
+        self._answer_pending(RCS_STATUS.ERROR)
         was_mdi = self.run is Run.MDI
         self._abort()
         self._run_on_abort(
@@ -1140,9 +1160,13 @@ class Task:
             self.stat.status = RCS_STATUS.ERROR
             self.operator_error(outcome)
             return
+        self._answer_pending(RCS_STATUS.DONE)
+
+    def _answer_pending(self, status: RCS_STATUS) -> None:
+        """Answer the command still running (an MDI command, a program run), if any."""
         if self.pending_serial:
             self.stat.echo_serial_number = self.pending_serial
-            self.stat.status = RCS_STATUS.DONE
+            self.stat.status = status
             self.pending_serial = 0
 
     def _check_motion_errors(self) -> None:
