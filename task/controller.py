@@ -195,6 +195,9 @@ class Task:
         # a command still running (MDI, a program run), answered DONE when finished
         self.pending_serial = 0
         self.last_motion_serial = 0
+        # motion may still be stopping from an abort: a move sent now would be dropped
+        # with the aborted ones (it empties its queue once at rest), so moves wait
+        self.is_after_abort = False
         self.last_io_serial = 0
         self.checked_motion_serial = 0
         self.file = ""
@@ -771,8 +774,10 @@ class Task:
         self.idle_reading_s = 0.0
 
     def _abort_motion(self) -> None:
-        """Stop motion along the path and every jog (LinuxCNC's emcMotionAbort)."""
+        """Stop motion along the path and every jog (LinuxCNC's emcMotionAbort); the moves
+        queued after it wait until motion is at rest."""
         self._send_motion(emc.EMC_MOTION_ABORT())
+        self.is_after_abort = True
 
     def _run_on_abort(self, reason: int) -> None:
         """[RS274NGC]ON_ABORT_COMMAND (e.g. ``O <on_abort> call``) after an abort or an
@@ -980,9 +985,14 @@ class Task:
             return True
         if msg.RECEIVER is Receiver.MOTION:
             motion = self.stat.motion
-            if isinstance(msg, emc.MOVES_WITH_MOTION_ID) and not motion.traj.enabled:
-                self._refuse_move_with_motion_off()
-                return True
+            if isinstance(msg, emc.MOVES_WITH_MOTION_ID):
+                if not motion.traj.enabled:
+                    self._refuse_move_with_motion_off()
+                    return True
+                if self.is_after_abort:
+                    if not self._is_motion_done():
+                        return False
+                    self.is_after_abort = False
             in_flight = self.last_motion_serial - motion.echo_serial_number
             if motion.traj.queueFull or in_flight >= MAX_MOTION_IN_FLIGHT:
                 return False
