@@ -46,6 +46,9 @@ MAX_MDI_COMMANDS = 64  # LinuxCNC's limit on [HALUI]MDI_COMMAND lines
 MDI_COMMAND_BYTES = 254  # what an EMC_TASK_PLAN_EXECUTE holds (LINELEN - 1; cnc.api's TEXT_LIMIT)
 HUGE = 1e99  # LinuxCNC's "no limit" for positions, velocities and accelerations
 MM_PER_INCH = 25.4
+# The blending the canon starts with (LinuxCNC's INIT_CANON: G64 within 0.001 inch); motion
+# starts with it too, in the machine's units
+DEFAULT_BLEND_TOLERANCE_MM = 0.001 * MM_PER_INCH
 
 
 # --------------------------------------------------------------------------- kinds of values
@@ -488,7 +491,7 @@ _SECTIONS = [
                   "STEP_SCALE", "STEPGEN_MAXACCEL", "STEPGEN_MAXVEL"),
     ]),
     Section("SPINDLE_<n>", [
-        real("MAX_FORWARD_VELOCITY", 2147483000.0, low=0),  # rpm
+        real("MAX_FORWARD_VELOCITY", HUGE, low=0),  # rpm (LinuxCNC: no limit)
         real("MIN_FORWARD_VELOCITY", 0.0, low=0),
         real("MAX_REVERSE_VELOCITY", SameAs("MAX_FORWARD_VELOCITY"), low=0),
         real("MIN_REVERSE_VELOCITY", SameAs("MIN_FORWARD_VELOCITY"), low=0),

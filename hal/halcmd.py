@@ -62,6 +62,7 @@ USERSPACE_TOOLS = {
     "halui": [sys.executable, "-m", "cnc.halui"],
     "mb2hal": [sys.executable, "-m", "hal.modbus.mb2hal"],
     "hy_vfd": [sys.executable, "-m", "hal.modbus.hy_vfd"],
+    "motion-logger": [sys.executable, "-m", "motion.logger"],
     "mqtt-publisher": [sys.executable, "-m", "cnc.bridges.mqtt_publisher"],
     "xhc-hb04": [sys.executable, "-m", "hal.xhc_hb04"],
     # simulated hardware for the sim configs (not LinuxCNC programs)

@@ -544,8 +544,8 @@ class MotionController(SpindleControl, JogWheels, TeleopControl, StatusFilling):
 
     @handler(emc.EMC_TRAJ_SET_VELOCITY)
     def _set_velocity(self, cmd: emc.EMC_TRAJ_SET_VELOCITY) -> None:
-        if not cmd.velocity > 0:
-            raise Refused(f"velocity must be positive, got {cmd.velocity}")
+        if not cmd.velocity >= 0:  # (0 at start-up, as LinuxCNC's task sends it)
+            raise Refused(f"velocity must not be negative, got {cmd.velocity}")
         self.traj_vel = cmd.velocity
 
     @handler(emc.EMC_TRAJ_SET_ACCELERATION)

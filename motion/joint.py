@@ -7,7 +7,9 @@ the HAL-facing switch bits that homing reads.
 
 Each servo period the motion component does, per joint:
 
-1. ``update_feedback(motor_pos_fb)``: pos_fb = motor_pos_fb - offset - compensation (MOT-007);
+1. ``update_feedback(motor_pos_fb)``: pos_fb = motor_pos_fb - offset - compensation (MOT-007),
+   and the following error: the command of the last period, which this feedback answers,
+   minus the feedback (as LinuxCNC's motion, before it computes the new command);
 2. homing (``motion.homing``) and the planners set ``pos_cmd`` (free mode: ``planner.step``);
 3. ``update_command(dt)``: motor_pos_cmd = pos_cmd + compensation + offset (MOT-005);
 4. ``is_following_error()``: fault when the error exceeds the speed-scaled limit (MOT-074).
@@ -172,6 +174,9 @@ class Joint:
         """MOT-007: pos_fb = motor_pos_fb - home offset - compensation."""
         self.motor_pos_fb = float(motor_pos_fb)
         self.pos_fb = self.motor_pos_fb - self.motor_offset - self.compensation
+        # (a drive that follows its command exactly, a loopback, has no error)
+        self.ferror = self.pos_cmd - self.pos_fb
+        self.ferror_high_mark = max(self.ferror_high_mark, abs(self.ferror))
 
     def update_command(self, dt: float) -> None:
         """MOT-005: motor_pos_cmd = pos_cmd + compensation + home offset."""
@@ -189,8 +194,6 @@ class Joint:
             self._comp_filter.move_to(target, self._comp_filter.max_vel)
             self._comp_filter.step(dt)
         self.motor_pos_cmd = self.pos_cmd + self.compensation + self.motor_offset
-        self.ferror = self.pos_cmd - self.pos_fb
-        self.ferror_high_mark = max(self.ferror_high_mark, abs(self.ferror))
 
     def following_error_limit(self) -> float:
         """Allowed error at the current commanded speed: MIN_FERROR at rest growing to

@@ -92,6 +92,10 @@ class IniSettings:
     def __init__(self) -> None:
         self.heartbeat_timeout = DEFAULT_HEARTBEAT_TIMEOUT_S
         self.eoffset_ratios: dict[int, float] = {}  # [AXIS_L]OFFSET_AV_RATIO
+        # the blending the canon starts with (LinuxCNC's INIT_CANON: G64 within 0.001
+        # inch), in machine units ([TRAJ]LINEAR_UNITS); task starts in agreement with it
+        # rather than sending it (LinuxCNC's first abort drops it when it comes early)
+        self.blend_tolerance: float | None = None
         self.locking_joints: dict[int, int] = {}  # [AXIS_L]LOCKING_INDEXER_JOINT
 
 
@@ -208,6 +212,8 @@ class Motmod:
         except ValueError as exc:
             raise HalError(f"motmod: {exc}") from None
         settings = _ini_settings()
+        if settings.blend_tolerance is not None:
+            self.controller.tolerance = settings.blend_tolerance
         try:
             for axis, ratio in settings.eoffset_ratios.items():
                 self.controller.eoffsets.set_ratio(axis, ratio)
@@ -587,12 +593,14 @@ class Motmod:
 def _ini_settings() -> IniSettings:
     """What motion reads of the machine's INI ($CNC_INI_FILE, from the launcher, which
     checked it against cnc/inischema.py): [EMCMOT]HEARTBEAT_TIMEOUT, and per axis
-    OFFSET_AV_RATIO and LOCKING_INDEXER_JOINT. Defaults without an INI file."""
+    OFFSET_AV_RATIO and LOCKING_INDEXER_JOINT, the blend tolerance from [TRAJ]LINEAR_UNITS.
+    Defaults without an INI file."""
     settings = IniSettings()
     path = os.environ.get("CNC_INI_FILE")
     if not path:
         return settings
     from cnc.ini import IniError, IniFile
+    from cnc.inischema import DEFAULT_BLEND_TOLERANCE_MM, LINEAR_UNITS, MM_PER_INCH
 
     try:
         ini = IniFile.load(path)
@@ -607,6 +615,9 @@ def _ini_settings() -> IniSettings:
             joint = ini.get_int(section, "LOCKING_INDEXER_JOINT")
             if joint is not None and joint >= 0:
                 settings.locking_joints[axis] = joint
+        units = LINEAR_UNITS.parse(ini.find("TRAJ", "LINEAR_UNITS") or "")
+        mm_per_unit = MM_PER_INCH if units == "inch" else 1.0
+        settings.blend_tolerance = DEFAULT_BLEND_TOLERANCE_MM / mm_per_unit
     except (IniError, OSError, ValueError):
         return settings
     return settings

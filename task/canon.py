@@ -89,6 +89,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import IO
 
+from cnc.inischema import DEFAULT_BLEND_TOLERANCE_MM
 from iocontrol.tooldata import ToolDataError, ToolDataReader
 from iocontrol.tooltable import CANON_POCKETS_MAX, ToolEntry, ToolTable
 from nml import emc
@@ -294,8 +295,8 @@ class TaskCanon:
         self._chain_tag: tuple | None = None  # ... when the last held-back feed was seen
         self._tag_packed: tuple[tuple | None, bytes] = (None, bytes(_TAG_SIZE))
         self._motion_line: int | None = None  # line of the last EMC_TRAJ_SET_MOTION_ID
-        # the default blending tolerance is 0.001 inch
-        self.SET_MOTION_CONTROL_MODE(C.CONTINUOUS, 0.001 * MM_PER_INCH / self._mm_per_unit)
+        # the default blending tolerance is 0.001 inch (motion starts with it too)
+        self.SET_MOTION_CONTROL_MODE(C.CONTINUOUS, DEFAULT_BLEND_TOLERANCE_MM / self._mm_per_unit)
 
     # ================================================================ world model
     def set_status(self, stat: emc.EMC_STAT) -> None:

@@ -168,8 +168,11 @@ class Task:
             writable_dirs=_writable_dirs(ini, self.setup),
         )
         self.canon = (canon_factory or TaskCanon)(canon_setup)
-        # what the canon queues, with line numbers (it may hold INIT_CANON's settings already)
-        self.queue = self.canon.out = LineQueue(self.canon.out)
+        # what the canon queues, with line numbers. It holds INIT_CANON's blending already,
+        # which motion starts with itself (motion/motmod.py): not sent (LinuxCNC's task
+        # sends it, unless an E-stop reset comes first and drops it)
+        initial = [m for m in self.canon.out if not isinstance(m, emc.EMC_TRAJ_SET_TERM_COND)]
+        self.queue = self.canon.out = LineQueue(initial)
         self.interp = Interpreter(
             self.canon,
             ini=ini,
@@ -189,8 +192,12 @@ class Task:
         self.delay_until = 0.0
         self.input_wait: tuple[int, float] | None = None  # an M66 under way: (mode, deadline)
         self.mdi_queue: deque[tuple[int, str]] = deque()
-        self.pending_serial = 0  # a command still running (MDI), answered DONE when finished
+        # a command still running (MDI, a program run), answered DONE when finished
+        self.pending_serial = 0
         self.last_motion_serial = 0
+        # motion may still be stopping from an abort: a move sent now would be dropped
+        # with the aborted ones (it empties its queue once at rest), so moves wait
+        self.is_after_abort = False
         self.last_io_serial = 0
         self.checked_motion_serial = 0
         self.file = ""
@@ -227,9 +234,21 @@ class Task:
 
     # ================================================================ main loop
     def start(self) -> None:
-        """Tell motion the machine's limits and where it was, then publish the first status."""
+        """Tell motion the machine's limits and where it was, put the machine in E-stop
+        (as LinuxCNC's task starts: motion and the spindles stopped, motion off, the
+        VOLATILE_HOME joints unhomed, joint mode), run the startup code, then publish
+        the first status."""
         for msg in self.setup.motion_init_messages() + self._saved_positions():
             self._send_motion(msg)
+        self._await(MOTION_STATUS, "motion", self.last_motion_serial, timeout=5.0)
+        self.refresh()  # (motion's spindles)
+        # (what the interpreter queued as it started stays queued: offsets, ...)
+        self._abort_motion()
+        self._stop_spindles()
+        self._send_motion(emc.EMC_TRAJ_DISABLE())
+        self._send_io(emc.EMC_AUX_ESTOP_ON())
+        self._unhome_volatile_joints()
+        self._send_motion(emc.EMC_TRAJ_SET_MODE(mode=emc.EMC_TRAJ_MODE_ENUM.FREE))
         self._await(MOTION_STATUS, "motion", self.last_motion_serial, timeout=5.0)
         self.refresh()
         self._run_startup_code()
@@ -362,11 +381,19 @@ class Task:
         """Carry out one command and answer it (EXEC, then DONE or ERROR)."""
         stat = self.stat
         echo(stat, cmd, RCS_STATUS.EXEC)
+        serial = cmd.serial_number  # (a command passed on to motion gets motion's number)
+        sent_before = self.last_motion_serial
         answer = carry_out("task", self._carry_out, cmd, expected=(InterpError, ValueError))
+        if self.last_motion_serial != sent_before:
+            # as LinuxCNC's task, which waits for motion to take each command it sends: a
+            # command is answered once motion has what it sent (motion says why it refuses)
+            self._await(MOTION_STATUS, "motion", self.last_motion_serial)
+        # (echoed again: an abort it made may have answered an earlier running command)
+        echo(stat, cmd, answer.status)
+        stat.echo_serial_number = serial
         if answer.status == RCS_STATUS.EXEC:  # still running: answered when it finishes
-            self.pending_serial = cmd.serial_number
+            self.pending_serial = serial
             return
-        stat.status = answer.status
         if answer.reason is not None:
             self.operator_error(answer.reason)
         self.refresh()
@@ -423,7 +450,8 @@ class Task:
                     "cannot reset E-stop: the E-stop chain (iocontrol.0.emc-enable-in) is open"
                 )
             self._abort_all()
-            self._send_motion(emc.EMC_TRAJ_DISABLE())
+            if self.stat.motion.traj.enabled:  # (off in E-stop: only as a safeguard)
+                self._send_motion(emc.EMC_TRAJ_DISABLE())
             self.state = STATE.ESTOP_RESET
         elif target == STATE.ON:
             if self.state == STATE.ESTOP:
@@ -434,7 +462,8 @@ class Task:
             if self.state == STATE.ESTOP:
                 raise Refused("cannot turn the machine off while in E-stop (reset it first)")
             self._abort_all()
-            self._send_motion(emc.EMC_TRAJ_DISABLE(), is_waiting=True)
+            self._send_motion(emc.EMC_TRAJ_DISABLE())
+            self._unhome_volatile_joints()
             self.state = STATE.OFF
         else:
             raise Refused(f"unknown machine state {target}")
@@ -449,7 +478,13 @@ class Task:
         if not is_braking:
             self._send_motion(emc.EMC_TRAJ_DISABLE())
             self._send_io(emc.EMC_AUX_ESTOP_ON())
+            self._unhome_volatile_joints()
         self.state = STATE.ESTOP
+
+    def _unhome_volatile_joints(self) -> None:
+        """[JOINT_n]VOLATILE_HOME joints lose their home with E-stop and machine off, as
+        in LinuxCNC (motion off: sent after EMC_TRAJ_DISABLE)."""
+        self._send_motion(emc.EMC_JOINT_UNHOME(joint=-2))
 
     @handler(emc.EMC_TASK_SET_MODE)
     def _set_mode(self, cmd: emc.EMC_TASK_SET_MODE) -> None:
@@ -460,6 +495,16 @@ class Task:
             return
         if self.run is Run.PROGRAM:
             raise Refused("cannot change mode while a program runs (abort it first)")
+        if mode in (MODE.AUTO, MODE.MDI):
+            # as LinuxCNC's task: coordinated mode at once, then an abort (what ran in the
+            # other mode stops); not while jogging, which LinuxCNC ignores the change for
+            if self.stat.motion.jogging_active:
+                raise Refused("cannot change mode while jogging")
+            self._send_motion(emc.EMC_TRAJ_SET_MODE(mode=emc.EMC_TRAJ_MODE_ENUM.COORD))
+            if self.run is Run.IDLE:  # (what waits in the queue, a restore, stays)
+                self._abort_motion()
+            else:
+                self._abort()
         if mode == MODE.MANUAL:
             # manual mode jogs world axes (teleop) once every joint is homed, else joints
             # (free), as LinuxCNC's emcTaskSetMode; asked again (after homing) it switches,
@@ -484,9 +529,6 @@ class Task:
 
     def _ensure_coordinated(self) -> None:
         """Programs and MDI need coordinated mode, which needs homed joints (TASK-016)."""
-        traj = self.stat.motion.traj
-        if traj.mode == emc.EMC_TRAJ_MODE_ENUM.COORD:
-            return
         joints = self.stat.motion.joint
         is_forced = self.setup.is_homing_forced or self.is_homing_required
         if is_forced and not all(joints[i].homed for i in range(len(self.setup.joints))):
@@ -495,6 +537,8 @@ class Task:
                     "all joints must be homed first (the last run did not save positions)"
                 )
             raise Refused("all joints must be homed first ([TRAJ]NO_FORCE_HOMING is not set)")
+        if self.stat.motion.traj.mode == emc.EMC_TRAJ_MODE_ENUM.COORD:
+            return  # (since the switch to Auto or MDI mode, as a rule)
         self._order(self._send_motion, emc.EMC_TRAJ_SET_MODE(mode=emc.EMC_TRAJ_MODE_ENUM.COORD))
 
     # ---------------------------------------------------------------- MDI and programs
@@ -557,7 +601,7 @@ class Task:
         self.file = ""
 
     @handler(emc.EMC_TASK_PLAN_RUN)
-    def _run_program(self, cmd: emc.EMC_TASK_PLAN_RUN) -> None:
+    def _run_program(self, cmd: emc.EMC_TASK_PLAN_RUN) -> str:
         if not self.file:
             raise Refused("no program open (program_open first)")
         if self.run is not Run.IDLE:
@@ -586,6 +630,7 @@ class Task:
         self.skipped_tool_change = None
         self.furthest_line = 0
         self.is_stepping = False
+        return RUNNING  # answered when the program ends, as LinuxCNC's (wait_complete waits)
 
     @handler(emc.EMC_TASK_PLAN_PAUSE)
     def _pause(self, _cmd: emc.NMLmsg) -> None:
@@ -670,6 +715,9 @@ class Task:
             if cmd.request <= self.abort_handled:
                 return  # done already, from the board
             self.abort_handled = cmd.request
+        # as LinuxCNC's task: the abort, then motion aborted once more (and the spindles
+        # stopped) before the interpreter's state is restored
+        self._abort()
         self._abort_all()
         if self.mode == MODE.AUTO:
             self._restore_interpreter_state()
@@ -697,13 +745,17 @@ class Task:
         as ``_abort``, and every spindle stops and iocontrol turns the coolant off and
         drops any tool-change handshake (emcIoAbort, emcSpindleAbort)."""
         self._abort()
-        for spindle in range(max(self.stat.motion.traj.spindles, 1)):
-            self._send_motion(emc.EMC_SPINDLE_OFF(spindle=spindle))
+        self._stop_spindles()
         self._send_io(emc.EMC_TOOL_ABORT())
 
+    def _stop_spindles(self) -> None:
+        for spindle in range(max(self.stat.motion.traj.spindles, 1)):
+            self._send_motion(emc.EMC_SPINDLE_OFF(spindle=spindle))
+
     def _abort(self) -> None:
-        """Stop motion along the path, forget what was queued (LinuxCNC's emcTaskAbort)."""
-        self._send_motion(emc.EMC_TRAJ_ABORT())
+        """Stop motion along the path and every jog, forget what was queued (LinuxCNC's
+        emcTaskAbort)."""
+        self._abort_motion()
         if self.stat.io.status == RCS_STATUS.EXEC:
             self._send_io(emc.EMC_TOOL_ABORT())
         self.queue.clear()
@@ -718,8 +770,14 @@ class Task:
         self.is_waiting_for_synch = False
         self.delay_until = 0.0
         self.input_wait = None
-        self.pending_serial = 0
+        self._answer_pending(RCS_STATUS.DONE)  # (stopped: done, as LinuxCNC's status says)
         self.idle_reading_s = 0.0
+
+    def _abort_motion(self) -> None:
+        """Stop motion along the path and every jog (LinuxCNC's emcMotionAbort); the moves
+        queued after it wait until motion is at rest."""
+        self._send_motion(emc.EMC_MOTION_ABORT())
+        self.is_after_abort = True
 
     def _run_on_abort(self, reason: int) -> None:
         """[RS274NGC]ON_ABORT_COMMAND (e.g. ``O <on_abort> call``) after an abort or an
@@ -890,9 +948,7 @@ class Task:
         )
         self.operator_error(f"{text}{where}")
         self.stat.task.interpreter_errcode = 1
-        if self.pending_serial:
-            self.stat.echo_serial_number = self.pending_serial
-            self.stat.status = RCS_STATUS.ERROR
+        self._answer_pending(RCS_STATUS.ERROR)
         was_mdi = self.run is Run.MDI
         self._abort()
         self._run_on_abort(
@@ -929,6 +985,14 @@ class Task:
             return True
         if msg.RECEIVER is Receiver.MOTION:
             motion = self.stat.motion
+            if isinstance(msg, emc.MOVES_WITH_MOTION_ID):
+                if not motion.traj.enabled:
+                    self._refuse_move_with_motion_off()
+                    return True
+                if self.is_after_abort:
+                    if not self._is_motion_done():
+                        return False
+                    self.is_after_abort = False
             in_flight = self.last_motion_serial - motion.echo_serial_number
             if motion.traj.queueFull or in_flight >= MAX_MOTION_IN_FLIGHT:
                 return False
@@ -954,6 +1018,17 @@ class Task:
             return False
         self._await(MOTION_STATUS, "motion", self.last_motion_serial)
         return True
+
+    def _refuse_move_with_motion_off(self) -> None:
+        """A queued move with motion off (the startup code's, in E-stop): motion would
+        refuse it, and LinuxCNC's task then drops what is queued. Said, and dropped
+        without sending anything (nothing reached motion that needs stopping)."""
+        text = "cannot move with the machine off: the queued moves and what follows are dropped"
+        if self.run is not Run.IDLE:
+            self._program_error(text)
+            return
+        self.operator_error(text)
+        self.queue.clear()
 
     @handler(emc.EMC_TRAJ_DELAY, table=QUEUE)
     def _delay(self, msg: emc.EMC_TRAJ_DELAY, now: float) -> bool:
@@ -1095,9 +1170,13 @@ class Task:
             self.stat.status = RCS_STATUS.ERROR
             self.operator_error(outcome)
             return
+        self._answer_pending(RCS_STATUS.DONE)
+
+    def _answer_pending(self, status: RCS_STATUS) -> None:
+        """Answer the command still running (an MDI command, a program run), if any."""
         if self.pending_serial:
             self.stat.echo_serial_number = self.pending_serial
-            self.stat.status = RCS_STATUS.DONE
+            self.stat.status = status
             self.pending_serial = 0
 
     def _check_motion_errors(self) -> None:
@@ -1184,6 +1263,7 @@ class Task:
         if self.state != STATE.ESTOP and self.stat.io.aux.estop:
             self._abort_all()
             self._send_motion(emc.EMC_TRAJ_DISABLE())
+            self._unhome_volatile_joints()
             self.state = STATE.ESTOP
             self.operator_error("E-stop: the E-stop chain opened (iocontrol.0.emc-enable-in)")
 

@@ -129,18 +129,28 @@ class MachineSetup:
         return str(self.config.resolve(name))
 
     def motion_init_messages(self) -> list[emc.NMLmsg]:
-        """The limits motion needs before it can move (sent once at start-up)."""
-        out: list[emc.NMLmsg] = []
+        """What motion needs before it can move (sent once at start-up), in the order
+        LinuxCNC's task sends it (iniTraj, iniJoint, iniAxis, iniSpindle): trajectory
+        settings, then each joint, each axis, each spindle."""
+        value = self.config.value
+        default_acceleration = value("TRAJ", "DEFAULT_LINEAR_ACCELERATION")
+        out: list[emc.NMLmsg] = [
+            # no speed yet (a move brings its own); the default is the UIs' jog speed
+            emc.EMC_TRAJ_SET_VELOCITY(velocity=0.0, ini_maxvel=self.default_velocity),
+            # 1e99 when the INI file sets none: the axes' limits apply
+            emc.EMC_TRAJ_SET_MAX_VELOCITY(velocity=self.max_velocity),
+            emc.EMC_TRAJ_SET_ACCELERATION(acceleration=default_acceleration),
+        ]
+        if self.config.is_set("TRAJ", "MAX_LINEAR_ACCELERATION"):
+            out.append(emc.EMC_TRAJ_SET_MAX_ACCELERATION(acceleration=self.max_acceleration))
         for index, joint in enumerate(self.joints):
             sequence = joint.home_sequence
             out += [
+                emc.EMC_JOINT_SET_BACKLASH(joint=index, backlash=joint.backlash),
                 emc.EMC_JOINT_SET_MIN_POSITION_LIMIT(joint=index, limit=joint.min_limit),
                 emc.EMC_JOINT_SET_MAX_POSITION_LIMIT(joint=index, limit=joint.max_limit),
-                emc.EMC_JOINT_SET_MAX_VELOCITY(joint=index, vel=joint.max_vel),
-                emc.EMC_JOINT_SET_MAX_ACCELERATION(joint=index, acc=joint.max_acc),
                 emc.EMC_JOINT_SET_FERROR(joint=index, ferror=joint.ferror),
                 emc.EMC_JOINT_SET_MIN_FERROR(joint=index, ferror=joint.min_ferror),
-                emc.EMC_JOINT_SET_BACKLASH(joint=index, backlash=joint.backlash),
                 emc.EMC_JOINT_SET_HOMING_PARAMS(
                     joint=index,
                     home=joint.home,
@@ -157,6 +167,8 @@ class MachineSetup:
                     locking_indexer=joint.locking_indexer,
                     absolute_encoder=joint.home_absolute_encoder,
                 ),
+                emc.EMC_JOINT_SET_MAX_VELOCITY(joint=index, vel=joint.max_vel),
+                emc.EMC_JOINT_SET_MAX_ACCELERATION(joint=index, acc=joint.max_acc),
             ]
         for index, axis in self.axes.items():
             out += [
@@ -165,23 +177,17 @@ class MachineSetup:
                 emc.EMC_AXIS_SET_MAX_VELOCITY(axis=index, vel=axis.max_vel),
                 emc.EMC_AXIS_SET_MAX_ACCELERATION(axis=index, acc=axis.max_acc),
             ]
-        for index in range(self.config.value("TRAJ", "SPINDLES")):
+        for index in range(value("TRAJ", "SPINDLES")):
             section = f"SPINDLE_{index}"  # (the reverse limits default to the forward ones)
             out.append(
                 emc.EMC_SPINDLE_SET_PARAMS(
                     spindle=index,
-                    max_forward=self.config.value(section, "MAX_FORWARD_VELOCITY"),
-                    min_forward=self.config.value(section, "MIN_FORWARD_VELOCITY"),
-                    max_reverse=self.config.value(section, "MAX_REVERSE_VELOCITY"),
-                    min_reverse=self.config.value(section, "MIN_REVERSE_VELOCITY"),
+                    max_forward=value(section, "MAX_FORWARD_VELOCITY"),
+                    min_forward=value(section, "MIN_FORWARD_VELOCITY"),
+                    max_reverse=value(section, "MAX_REVERSE_VELOCITY"),
+                    min_reverse=value(section, "MIN_REVERSE_VELOCITY"),
                 )
             )
-        # LinuxCNC sends 1e99 when the INI file has none ("the axes' limits apply"); ours
-        # says nothing then, and motion keeps the axes' limits
-        if self.config.is_set("TRAJ", "MAX_LINEAR_VELOCITY"):
-            out.append(emc.EMC_TRAJ_SET_MAX_VELOCITY(velocity=self.max_velocity))
-        if self.config.is_set("TRAJ", "MAX_LINEAR_ACCELERATION"):
-            out.append(emc.EMC_TRAJ_SET_MAX_ACCELERATION(acceleration=self.max_acceleration))
         return out
 
 

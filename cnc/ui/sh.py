@@ -164,6 +164,15 @@ class Shell:
                 "'set timeout S' waits longer)"
             )
 
+    def start(self, method: str, *args: Any) -> None:
+        """Call ``cnc.command().<method>(*args)`` and wait only until the controller took
+        it (a program run is answered when the program ends: ``wait`` waits for that);
+        CommandError if it refuses it."""
+        commands = self.controller.command
+        getattr(commands, method)(*args)
+        if commands.wait_complete(0) == cnc.RCS_ERROR:
+            raise CommandError("the controller reported an error")
+
     def status(self) -> cnc.stat:
         """The controller's status, polled now."""
         return self.controller.poll()
@@ -317,7 +326,7 @@ def _open(shell: Shell, text: str) -> None:
 @command("run [LINE]", "run the open program (from LINE)")
 def _run(shell: Shell, text: str) -> None:
     line = [integer(word, "line") for word in words(text, 0, 1)]
-    shell.send("auto", cnc.AUTO_RUN, line[0] if line else 0)
+    shell.start("auto", cnc.AUTO_RUN, line[0] if line else 0)
 
 
 @command("pause", "pause the running program")

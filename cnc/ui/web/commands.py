@@ -149,6 +149,14 @@ class Commands:
         if result != cnc.RCS_DONE:
             raise CommandError(f"{method} not finished after {timeout:g} s (it may still run)")
 
+    def start(self, method: str, *args: Any) -> None:
+        """``cnc.command().<method>(*args)``, waiting only until the controller took it: a
+        program run is answered when the program ends (as LinuxCNC's task answers it)."""
+        commands = self.command
+        getattr(commands, method)(*args)
+        if commands.wait_complete(0) == cnc.RCS_ERROR:
+            raise CommandError(f"the controller refused {method}", is_reported=True)
+
     def program_scale(self) -> float:
         """Program units per machine unit (G20/G21 of the moment): what an MDI line needs
         to say a length in machine units."""
@@ -607,7 +615,7 @@ def run_filter(program: str, path: Path) -> Path:
 def _run(c: Commands, r: dict[str, Any]) -> None:
     line = whole(r, "line", 0)
     c.ensure_mode(cnc.MODE_AUTO)
-    c.send("auto", cnc.AUTO_RUN, line)
+    c.start("auto", cnc.AUTO_RUN, line)
 
 
 @handler("pause")
