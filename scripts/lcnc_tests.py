@@ -28,9 +28,11 @@ from __future__ import annotations
 
 import argparse
 import concurrent.futures
+import contextlib
 import difflib
 import os
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
@@ -38,6 +40,7 @@ import threading
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import IO
 
 REPO = Path(__file__).resolve().parents[1]
 MIRROR = Path("/work/.mirror/LinuxCNC+linuxcnc/repo")
@@ -207,17 +210,7 @@ def run_one_alone(script: Path, tests_root: Path, env: dict[str, str], timeout: 
     for _ in range(OVERRUN_RETRIES if script.name == "test.hal" else 1):
         with open(folder / "result", "wb") as out, open(folder / "stderr", "wb") as err:
             try:
-                proc = subprocess.run(
-                    command,
-                    cwd=folder,
-                    env=test_env,
-                    stdout=out,
-                    stderr=err,
-                    stdin=subprocess.DEVNULL,
-                    timeout=timeout,
-                    start_new_session=True,
-                )
-                exitcode = proc.returncode
+                exitcode = run_in_own_group(command, folder, test_env, out, err, timeout)
             except subprocess.TimeoutExpired:
                 cleanup(test_env)
                 return Outcome(
@@ -271,6 +264,33 @@ def run_one_alone(script: Path, tests_root: Path, env: dict[str, str], timeout: 
             )
         return Outcome(name, "PASS", "", seconds)
     return Outcome(name, "FAIL", "neither expected nor checkresult exists", seconds)
+
+
+def run_in_own_group(
+    command: list[str], folder: Path, env: dict[str, str], out: IO, err: IO, timeout: float
+) -> int:
+    """Run a test's script in a process group of its own; on a timeout kill the whole
+    group (the machine it launched too, not only its shell), then raise TimeoutExpired."""
+    proc = subprocess.Popen(
+        command,
+        cwd=folder,
+        env=env,
+        stdout=out,
+        stderr=err,
+        stdin=subprocess.DEVNULL,
+        start_new_session=True,
+    )
+    try:
+        return proc.wait(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(proc.pid, signal.SIGTERM)
+        with contextlib.suppress(subprocess.TimeoutExpired):
+            proc.wait(timeout=5)
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+        raise
 
 
 def tail(path: Path, lines: int = 15) -> str:
