@@ -152,19 +152,14 @@ class _JointHoming:
         if cfg.absolute_encoder:
             # the encoder knows the position: feedback plus HOME_OFFSET
             joint.set_position(joint.motor_pos_fb - joint.compensation + cfg.home_offset)
-            self._after_latch()
+            self._after_latch_in_place()
             return None
         if cfg.locking_indexer:
             joint.is_unlock_requested = True
         elif cfg.search_vel == 0 and cfg.latch_vel == 0:
-            # homing in place: the position is known at once; with no final move to make
-            # the joint is homed now (LinuxCNC's zero-length final move takes two periods,
-            # so a UI's next home command finds it done there too)
+            # homing in place: the position is known at once
             joint.set_position(cfg.home_offset)
-            if math.isclose(joint.pos_cmd, cfg.home, rel_tol=0.0, abs_tol=1e-9):
-                self._finish()
-            else:
-                self._after_latch()
+            self._after_latch_in_place()
             return None
         self.state = HomeState.UNLOCK_WAIT
         return None
@@ -206,6 +201,16 @@ class _JointHoming:
             self._finish()
         else:
             self._enter(HomeState.FINAL_MOVE)
+
+    def _after_latch_in_place(self) -> None:
+        """The position is known without a move (absolute encoder, homing in place): a
+        joint already at HOME is homed now, as there is no final move to make
+        (LinuxCNC's zero-length final move takes two periods, so a UI's next home
+        command, sent as soon as this one is answered, finds it done there too)."""
+        if math.isclose(self.joint.pos_cmd, self.config.home, rel_tol=0.0, abs_tol=1e-9):
+            self._finish()
+        else:
+            self._after_latch()
 
     def _finish(self) -> None:
         joint = self.joint

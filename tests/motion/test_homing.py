@@ -386,3 +386,14 @@ def test_homing_every_joint_ends_free_mode_in_teleop_as_linuxcnc() -> None:
     assert set(modes[:-1]) <= {FREE} and modes[-1] == TELEOP
     jog = emc.EMC_JOG_CONT(joint_or_axis=0, vel=5.0, jjogmode=emc.JOG_MODE.TELEOP)
     assert motion.handle(jog) is None
+
+
+def test_an_absolute_encoder_already_at_home_is_homed_at_once() -> None:
+    # (a UI homing joints one after the other finds homing over: LinuxCNC refuses a home
+    # while another joint homes, and its zero-length final move takes two periods)
+    axis = Axis(x=2.0)
+    homing = one_joint(axis, absolute_encoder=1, home_offset=1.0, home=3.0)
+    axis.sense()
+    homing.home_joint(0)
+    assert axis.joint.is_homed
+    assert not homing.is_homing
