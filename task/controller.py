@@ -236,8 +236,8 @@ class Task:
     def start(self) -> None:
         """Tell motion the machine's limits and where it was, put the machine in E-stop
         (as LinuxCNC's task starts: motion and the spindles stopped, motion off, the
-        VOLATILE_HOME joints unhomed, joint mode), run the startup code, then publish
-        the first status."""
+        VOLATILE_HOME joints unhomed, joint mode), run the startup code and carry out what
+        is queued, then publish the first status."""
         for msg in self.setup.motion_init_messages() + self._saved_positions():
             self._send_motion(msg)
         self._await(MOTION_STATUS, "motion", self.last_motion_serial, timeout=5.0)
@@ -252,6 +252,11 @@ class Task:
         self._await(MOTION_STATUS, "motion", self.last_motion_serial, timeout=5.0)
         self.refresh()
         self._run_startup_code()
+        # the first status shows what the interpreter restored (the .var file's offsets)
+        # and the startup code set, as LinuxCNC's: a display may start with it
+        self._execute()
+        self._await(MOTION_STATUS, "motion", self.last_motion_serial, timeout=5.0)
+        self.refresh()
         self.publish()
 
     def _run_startup_code(self) -> None:
