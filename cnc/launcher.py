@@ -2,10 +2,11 @@
 
 Start-up, in LinuxCNC's order (ARCH-009/010): the NML buffers (this process is their master),
 the realtime host, iocontrol ([EMCIO]EMCIO, as the userspace HAL component ``iocontrol``),
-[HAL]HALUI (``halui`` is ``cnc.halui``), the HAL files ([HAL]HALFILE, then [HAL]HALCMD
-lines, with ``[SECTION]KEY`` taken from the INI), task ([TASK]TASK), the display
-([DISPLAY]DISPLAY), then [HAL]POSTGUI_HALFILE, then the bridges ([MQTT], [OPCUA]:
-cnc.bridges, restarted when they die, never taking the machine down).
+[HAL]HALUI (``halui`` is ``cnc.halui``), the HAL files ([HAL]HALFILE, with ``[SECTION]KEY``
+taken from the INI), task ([TASK]TASK) in the background, [HAL]HALCMD lines, the threads
+started, the display ([DISPLAY]DISPLAY), task's first status, then [HAL]POSTGUI_HALFILE,
+then the bridges ([MQTT], [OPCUA]: cnc.bridges, restarted when they die, never taking the
+machine down).
 
 Shut-down, when the display exits or on SIGINT/SIGTERM (ARCH-011): display, task (saves
 parameters and positions), HAL (``unload all``: motion, iocontrol, which saves the tool
@@ -149,11 +150,15 @@ class Launcher:
             say(f"starting {halui}")
             self._halcmd("loadusr", "-Wn", "halui", halui, "-ini", self.ini_path)
         self._run_hal_files()
+        # as LinuxCNC's launcher: task starts in the background, the threads tick, the
+        # display starts at once (a script that waits for motion's pins finds the display
+        # soon after), and the machine is ready when task has published its first status
+        self._start_task()
         for line in self.ini.findall("HAL", "HALCMD"):
             self._halcmd(*shlex.split(line))
         self._halcmd("start")  # the threads run from now on, as LinuxCNC starts them here
-        self._start_task()
         self._start_display()
+        self._await_task()
         if self._display_name() == "web" and self.display is not None:
             # LinuxCNC's GUIs run the POSTGUI files once their pins exist; ours does not
             # run HAL files itself, so the launcher does it for it
@@ -299,6 +304,9 @@ class Launcher:
             process_group=0,
             preexec_fn=die_with_parent,
         )
+
+    def _await_task(self) -> None:
+        """Until task has published its first status."""
         # no time limit while task lives (a loaded computer starts slowly; LinuxCNC's
         # launcher waits as long): said once after a while, Ctrl-C ends the wait
         status = self.nml[EMC_STATUS]
