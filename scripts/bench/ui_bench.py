@@ -44,7 +44,13 @@ the page in Debian's chromium through Playwright (skipped without them):
   acceleration (the rest is the command's way there); ``taken_ms``, from the press until
   task took the abort (its interpreter idle), and ``page_wait_ms_max``, how long a press
   waited for the page's thread (the event's time to its handler), and
-  ``running_longest_task_ms``, the page's longest busy stretch while the program ran.
+  ``running_longest_task_ms``, the page's longest busy stretch while the program ran;
+  ``event_to_motion_rest_ms``, ``event_to_rest_ms`` and ``event_to_board_ms``: from the
+  browser's pointerdown event (its time stamp on the system clock) to motion at rest (its
+  HAL pin motion.current-vel 0), to the status saying so (task publishes it, late while it
+  reads ahead) and to the abort on the safety board (motion takes it within a period):
+  the product's part, without
+  ``press_to_event_ms``, the harness's way to the browser (Playwright's driver, CDP).
 - "estimate", per shared program (../shared/reference/programs): the estimate
   (cnc/ui/estimate.py, from X0 Y0 Z10 as the runner starts) beside the run time on our
   machine (program_runner.run_program: RUN to idle and in position), and the error in
@@ -84,6 +90,7 @@ from hal.core import Hal  # noqa: E402
 from nml import emc  # noqa: E402
 from nml.channels import EMC_COMMAND, EMC_ERROR, EMC_STATUS, Nml, load_config  # noqa: E402
 from nml.ipcnames import remove_instance_objects  # noqa: E402
+from nml.safety import SafetyBoard  # noqa: E402
 
 # The status changes every 1.5 to 3 display cycles (at random, so that the changes do not
 # fall at one phase of the server's cycle): every change is seen.
@@ -399,6 +406,14 @@ def load_part(page, folder: Path, sizes: list[int]) -> dict[str, object]:  # typ
     return found
 
 
+def _until_zero(hal: Hal, pin: dict, timeout: float = 30) -> float:
+    """Poll a float pin every 0.1 ms until it reads 0; the epoch time (s) it did."""
+    deadline = time.monotonic() + timeout
+    while hal.pin_value(pin) != 0 and time.monotonic() < deadline:
+        time.sleep(0.0001)
+    return time.time()
+
+
 def stop_part(page, folder: Path, count: int, max_acc: float) -> dict[str, object]:  # type: ignore[no-untyped-def]
     import cnc
 
@@ -412,14 +427,26 @@ def stop_part(page, folder: Path, count: int, max_acc: float) -> dict[str, objec
         timeout=WAIT_MS, polling=50,
     )  # fmt: skip
     # how long the press waited for the page's thread (event time to the handler)
+    # and when the browser made the event (epoch ms: the system clock, which this process
+    # reads too), so the product's part is told from the harness's way to the browser
     page.evaluate(
-        "() => { window.stopWaits = []; document.getElementById('abort').addEventListener("
-        "'pointerdown', (e) => window.stopWaits.push(performance.now() - e.timeStamp),"
+        "() => { window.stopWaits = []; window.stopEvents = [];"
+        " document.getElementById('abort').addEventListener('pointerdown', (e) => {"
+        " window.stopWaits.push(performance.now() - e.timeStamp);"
+        " window.stopEvents.push(performance.timeOrigin + e.timeStamp); },"
         " { capture: true }); }"
     )
     page.evaluate(LONGEST_TASK)  # the longest stretch the page's thread is busy while running
     s = cnc.stat()
+    board = SafetyBoard.attach()
+    # motion's own speed (its HAL pin), beside the status task publishes: task may publish
+    # late while it reads ahead, motion's rest is what the machine does
+    hal = Hal(is_creating=False)
+    _name, vel_pin = hal.find_pin("motion.current-vel")
+    epoch_minus_monotonic_ms = (time.time() - time.monotonic()) * 1000
     rests, brakings, takens = [], [], []
+    presses, rested, boarded = [], [], []  # epoch ms: the press, at rest, on the board
+    motion_rested = []  # epoch ms: motion's speed 0
     with contextlib.suppress(OSError):  # the clock must not wait behind the browser's drawing
         os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(1))
     for _ in range(count):
@@ -431,16 +458,38 @@ def stop_part(page, folder: Path, count: int, max_acc: float) -> dict[str, objec
         s.poll()
         speed = s.current_vel
         start = time.perf_counter()
+        presses.append(time.time() * 1000)
         page.mouse.down()
+        motion_rested.append(_until_zero(hal, vel_pin) * 1000)
         wait_for(s, lambda s: s.interp_state == cnc.INTERP_IDLE or s.current_vel == 0, 30, 0.0005)
         takens.append((time.perf_counter() - start) * 1000)
         wait_for(s, lambda s: s.current_vel == 0, 30, 0.0005)
         rests.append((time.perf_counter() - start) * 1000)
+        rested.append(time.time() * 1000)
+        if board is not None:
+            boarded.append(board.abort_stamp() / 1e6 + epoch_minus_monotonic_ms)
         page.mouse.up()
         brakings.append(speed / max_acc * 1000)
         wait_for(s, lambda s: s.interp_state == cnc.INTERP_IDLE, 30)
+    events = page.evaluate("window.stopEvents")
+    hal.close()
+    if board is not None:
+        board.close()
+    event_to_motion_rest = [r - e for r, e in zip(motion_rested, events, strict=True)]
+    # the browser's event to the machine at rest: what the product takes
+    event_to_rest = [r - e for r, e in zip(rested, events, strict=True)]
+    event_to_board = [b - e for b, e in zip(boarded, events, strict=False)]
     return {
         "preview_points": int(page.locator("#preview").get_attribute("data-points")),
+        "event_to_motion_rest_ms_median": round(percentile(event_to_motion_rest, 0.5), 1),
+        "event_to_motion_rest_ms_max": round(max(event_to_motion_rest), 1),
+        "event_to_rest_ms_median": round(percentile(event_to_rest, 0.5), 1),
+        "event_to_rest_ms_max": round(max(event_to_rest), 1),
+        "event_to_board_ms_median": round(percentile(event_to_board, 0.5), 1)
+        if event_to_board
+        else None,
+        "event_to_board_ms_max": round(max(event_to_board), 1) if event_to_board else None,
+        "press_to_event_ms_max": round(max(e - p for e, p in zip(events, presses, strict=True)), 1),
         "rest_ms_median": round(percentile(rests, 0.5), 1),
         "rest_ms_max": round(max(rests), 1),
         "braking_ms_median": round(percentile(brakings, 0.5), 1),
@@ -451,6 +500,9 @@ def stop_part(page, folder: Path, count: int, max_acc: float) -> dict[str, objec
         "page_wait_ms_max": round(max(page.evaluate("window.stopWaits")), 1),
         "running_longest_task_ms": round(page.evaluate("window.benchLongest"), 1),
         "rest_ms_all": [round(r) for r in rests],
+        "event_to_motion_rest_ms_all": [round(r) for r in event_to_motion_rest],
+        "event_to_rest_ms_all": [round(r) for r in event_to_rest],
+        "event_to_board_ms_all": [round(b) for b in event_to_board],
         "taken_ms_all": [round(t) for t in takens],
         "runs": count,
     }
