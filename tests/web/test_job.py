@@ -50,6 +50,7 @@ def test_progress_and_remaining_time_come_from_the_estimate(tmp_path: Path) -> N
         "kind": "text",
         "text": "part.ngc finished in 2:00 (estimate 1:40, +20 %; paused 0:20)",
     }
+    tracker.close()  # (saved by a thread of its own)
     saved = json.loads((tmp_path / "jobs.json").read_text())
     assert saved == messages[1]["jobs"]
     assert saved[0]["result"] == "finished" and saved[0]["run_s"] == pytest.approx(120)

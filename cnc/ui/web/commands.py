@@ -22,6 +22,7 @@ from typing import Any
 import cnc
 from cnc.atomicfile import atomic_write_text
 from cnc.ui.formatting import parse_float
+from cnc.ui.web.jobs import at_job_priority
 from cnc.ui.web.offsets import SYSTEMS
 from cnc.ui.web.settings import Settings
 from iocontrol.tooltable import ToolEntry, ToolTable, ToolTableError
@@ -600,6 +601,7 @@ def run_filter(program: str, path: Path) -> Path:
                 stderr=subprocess.PIPE,
                 timeout=FILTER_TIMEOUT_S,
                 check=False,
+                preexec_fn=at_job_priority,  # (not the server's raised one)
             )
     except (OSError, subprocess.TimeoutExpired) as exc:
         raise CommandError(f"filter {program!r}: {exc}") from None

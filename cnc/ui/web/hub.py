@@ -41,6 +41,7 @@ from cnc.ui.web.jobs import ProgramJobs
 from cnc.ui.web.messages import UserMessages
 from cnc.ui.web.notices import Notices
 from cnc.ui.web.offsets import offsets_table, read_parameters
+from cnc.ui.web.priority import raise_worker_priority
 from cnc.ui.web.rpc import EVENT_OF_TYPE, Rpc, notification
 from cnc.ui.web.settings import Settings
 from cnc.ui.web.status import DISCONNECTED, FIELDS, diff, snapshot
@@ -159,8 +160,12 @@ class Hub:
         self.settings = settings
         self.controller = Controller(source)
         self.commands = Commands(settings, source)
-        self.executor = ThreadPoolExecutor(WORKERS, thread_name_prefix="cnc-web")
-        self.urgent_executor = ThreadPoolExecutor(URGENT_WORKERS, thread_name_prefix="cnc-stop")
+        self.executor = ThreadPoolExecutor(
+            WORKERS, thread_name_prefix="cnc-web", initializer=raise_worker_priority
+        )
+        self.urgent_executor = ThreadPoolExecutor(
+            URGENT_WORKERS, thread_name_prefix="cnc-stop", initializer=raise_worker_priority
+        )
         self.clients: set[Client] = set()
         self.status: dict[str, Any] = dict(DISCONNECTED)
         self.notices = Notices()
@@ -278,6 +283,10 @@ class Hub:
                 self.problems.append(f"[DISPLAY] MESSAGE_* pins not created: {exc}")
         for problem in self.problems:
             print(f"cnc ui web: {problem}", file=sys.stderr, flush=True)
+        # (run_in_executor(None, ...) of the server and aiohttp: workers as the hub's)
+        asyncio.get_running_loop().set_default_executor(
+            ThreadPoolExecutor(thread_name_prefix="cnc-web-io", initializer=raise_worker_priority)
+        )
         self._loops = [
             asyncio.create_task(self._poll_forever()),
             asyncio.create_task(self._watch_jogs()),
@@ -288,6 +297,7 @@ class Hub:
             loop.cancel()
             with contextlib.suppress(asyncio.CancelledError):
                 await loop
+        self.tracker.close()
         self.commands.is_stopping.set()
         for client in list(self.clients):
             await client.socket.close()

@@ -20,12 +20,14 @@ from __future__ import annotations
 import contextlib
 import json
 import time
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
 from cnc.atomicfile import atomic_write_text
 from cnc.ui.web.jobs import ProgramAnalysis, format_duration
+from cnc.ui.web.priority import raise_worker_priority
 
 HISTORY_KEPT = 200
 MIN_CORRECTION_S = 20.0  # estimated seconds run before the remaining time is corrected
@@ -61,6 +63,9 @@ class JobTracker:
         self._line, self._line_entered_s = -1, 0.0  # the line running, since (run time)
         self._is_error_seen = False
         self._start_time_s = 0.0  # the estimate's time at the start line
+        self._saver = ThreadPoolExecutor(
+            1, thread_name_prefix="cnc-web-history", initializer=raise_worker_priority
+        )
 
     def note_error(self) -> None:
         """An operator error arrived (the run, if any, ends as "error")."""
@@ -182,11 +187,21 @@ class JobTracker:
         ]
 
     def _save(self) -> None:
+        """Written by a thread of its own, in order: an atomic write waits for the disk
+        (fsync), which the server's event loop, reading STOPs, must never do."""
         if self.history_file is None:
             return
-        # a read-only folder must not stop the UI: the history then stays in memory
-        with contextlib.suppress(OSError):
-            atomic_write_text(self.history_file, json.dumps(self.history, indent=1))
+        self._saver.submit(_write_history, self.history_file, json.dumps(self.history, indent=1))
+
+    def close(self) -> None:
+        """Until the history saves asked for so far are on disk."""
+        self._saver.shutdown(wait=True)
+
+
+def _write_history(path: Path, text: str) -> None:
+    # a read-only folder must not stop the UI: the history then stays in memory
+    with contextlib.suppress(OSError):
+        atomic_write_text(path, text)
 
 
 def end_text(job: JobRecord) -> str:

@@ -1,7 +1,7 @@
 """Work on programs that must never slow the server: preview, time estimate, editor checks.
 
-Each job is a process of its own (``python -m cnc.ui.web.jobs SPEC.json``), started at a
-lower priority (nice ``NICE``), so that neither its CPU time nor its memory can delay a STOP
+Each job is a process of its own (``python -m cnc.ui.web.jobs SPEC.json``), run at a
+lower priority (niceness ``NICE``), so that neither its CPU time nor its memory can delay a STOP
 the server must pass on, and a job that is no longer wanted is simply killed. A job writes
 its results into its folder; the server (``ProgramJobs``, in its event loop) looks at the
 folder every display cycle and tells the pages what is new:
@@ -35,7 +35,9 @@ from typing import Any
 
 from cnc.atomicfile import atomic_write_text
 
-NICE = 5  # below the server (and motion, task, iocontrol), yet not starved on a busy box
+# niceness (absolute, whatever the server's): below the server and task, iocontrol, yet
+# not starved on a busy box
+NICE = 5
 PROGRESS_EVERY_S = 5.0  # of machine time, between two estimate-progress.json
 RECORD_SIZE = 16  # preview.RECORD.size (imported lazily: the server need not load it)
 PARENT_CHECK_S = 1.0
@@ -97,10 +99,15 @@ def _end_with_the_server(server: int) -> None:
             os._exit(1)
 
 
+def at_job_priority() -> None:
+    """Take the niceness of jobs (in a job, or a [FILTER] program the server starts)."""
+    with contextlib.suppress(OSError):  # (raising it is always allowed)
+        os.setpriority(os.PRIO_PROCESS, 0, NICE)
+
+
 def main(argv: list[str]) -> int:
     """``python -m cnc.ui.web.jobs SPEC.json``."""
-    with contextlib.suppress(OSError):
-        os.nice(NICE)
+    at_job_priority()
     threading.Thread(target=_end_with_the_server, args=(os.getppid(),), daemon=True).start()
     spec = json.loads(Path(argv[0]).read_text())
     try:

@@ -61,6 +61,7 @@ from cnc.ini import IniError
 from cnc.ui.controller import running_ini
 from cnc.ui.web.hub import Client, Hub, send
 from cnc.ui.web.jobs import RECORD_SIZE
+from cnc.ui.web.priority import raise_loop_priority
 from cnc.ui.web.settings import Settings
 
 STATIC = Path(__file__).with_name("static")
@@ -442,6 +443,9 @@ def main(argv: list[str]) -> int:
             file=sys.stderr,
         )
         return 2
+    problem = raise_loop_priority()  # (before any thread starts)
+    if problem:
+        print(f"cnc ui web: {problem}", file=sys.stderr, flush=True)
     hosts = HostCheck(args.host, settings.allowed_hosts)
     access = Access(args.token, args.read_only_token, keys, is_open)
     app = make_app(settings, args.ini, access, hosts)

@@ -1,0 +1,57 @@
+"""The web server's scheduling: a STOP or E-stop from a page reaches the safety board at
+once, however busy the computer is.
+
+A page's STOP is read by the server's event loop, which writes it on the safety board
+(hub.on_the_safety_board); motion takes it from there within a servo period. So the loop
+must run when a message arrives. Measured with ``scripts/bench/ui_bench.py --parts stop``
+(2 cores, Chromium drawing a 200,000-line preview in software on the same box, its drawing
+process at niceness -8): an ordinary thread, even at niceness -10, sometimes waited 100 to
+500 ms for a CPU, and so did the STOP behind it; the event loop as the lowest realtime
+priority (SCHED_FIFO 1) took it to the board within 25 ms.
+
+- The **event loop thread** runs SCHED_FIFO at ``LOOP_RT_PRIORITY``: above every ordinary
+  program, below motion's and HAL's threads (which keep the machine moving and braking).
+  Its work is light (status to the pages, small answers); what is heavy runs elsewhere.
+  ``SCHED_RESET_ON_FORK``: threads and processes it starts are ordinary again.
+- **Worker threads** (commands that wait for the machine, file reads) run at niceness
+  ``WORKER_NICE``: ahead of other programs, so one holding Python's interpreter lock is
+  not left waiting for a CPU while the loop waits for the lock.
+- **Jobs** (preview, estimate, filters) run niced below everything (jobs.NICE).
+
+Without the privilege (CAP_SYS_NICE, or RLIMIT_RTPRIO / RLIMIT_NICE from
+/etc/security/limits.conf) the server runs as it was started and says so once.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+
+LOOP_RT_PRIORITY = 1
+WORKER_NICE = -10
+
+
+def raise_loop_priority() -> str | None:
+    """Called by the event loop's thread before any other thread starts. Returns what
+    could not be done, for the log, or None."""
+    try:
+        os.sched_setscheduler(
+            0, os.SCHED_FIFO | os.SCHED_RESET_ON_FORK, os.sched_param(LOOP_RT_PRIORITY)
+        )
+        return None
+    except OSError as exc:
+        reason = exc.strerror
+    with contextlib.suppress(OSError):  # second best: ahead of ordinary programs
+        os.setpriority(os.PRIO_PROCESS, 0, WORKER_NICE)
+    return (
+        f"cannot run the event loop at realtime priority ({reason}): on a busy computer "
+        "a STOP from a page may wait for a CPU (allow it with CAP_SYS_NICE or an rtprio "
+        "limit in /etc/security/limits.conf)"
+    )
+
+
+def raise_worker_priority() -> None:
+    """A worker thread's initializer: niceness WORKER_NICE (Linux: per thread), if
+    allowed."""
+    with contextlib.suppress(OSError):
+        os.setpriority(os.PRIO_PROCESS, 0, WORKER_NICE)
