@@ -397,6 +397,7 @@ def load_part(page, folder: Path, sizes: list[int]) -> dict[str, object]:  # typ
             "listing_s": round(listing_s, 2),
             "preview_s": round(preview_s, 2),
             "points": int(page.locator("#preview").get_attribute("data-points")),
+            "lod_points": int(page.locator("#preview").get_attribute("data-lod") or 0),
             "longest_task_ms": round(longest, 1),
             "turn_fps": round(turn["frames"] / turn["seconds"], 1),
             "turn_page_fps": round(len(gaps) / max((times[-1] - times[0]) / 1000, 1e-9), 1),

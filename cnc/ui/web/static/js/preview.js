@@ -47,11 +47,12 @@ export class Preview {
     } });
   }
 
-  // What the worker drew: {points, drawn, renderer, frames, bounds}.
+  // What the worker drew: {points, drawn, renderer, frames, lod, bounds}.
   drawn(report) {
     this.canvas.dataset.points = report.points;
     this.canvas.dataset.drawn = report.drawn;
     this.canvas.dataset.frames = report.frames;  // ui_bench counts them
+    this.canvas.dataset.lod = report.lod;  // (the level of detail's points, for ui_bench)
     this.canvas.dataset.renderer = report.renderer;
     if (report.bounds && JSON.stringify(report.bounds) !== JSON.stringify(this.bounds)) {
       this.bounds = report.bounds;

@@ -79,7 +79,7 @@ out vec4 fragment;
 void main() { fragment = texture(image, place); }`;
 
 export class Renderer {
-  // ``report(message)`` tells the page what is drawn: {points, drawn, renderer, frames}.
+  // ``report(message)`` tells the page what is drawn: {points, drawn, renderer, frames, lod}.
   constructor(canvas, report) {
     this.canvas = canvas;
     this.report = report;
@@ -165,7 +165,8 @@ export class Renderer {
     }
     if (this.gl) this.paintGl(); else this.paint2d();
     this.frames++;
-    this.report({ points: this.count, drawn: this.drawn, renderer: this.kind, frames: this.frames });
+    this.report({ points: this.count, drawn: this.drawn, renderer: this.kind, frames: this.frames,
+      lod: this.lod ? this.lod.count : 0 });
   }
 
   // ---------------------------------------------------------------- level of detail
