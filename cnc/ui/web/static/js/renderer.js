@@ -12,11 +12,11 @@
 // is there. A long toolpath (over FULL_POINTS_PER_FRAME) costs more than one frame to
 // draw whole: a change of the view (turn, pan, zoom, size, colours) draws its level of
 // detail (lod.js: the points that keep its shape, made once as it arrives, in a buffer
-// of its own) at once, and, once the view rests for TURNING_MS, the whole toolpath is
-// drawn into a second image, FULL_POINTS_PER_FRAME points a frame, which then takes the
-// first one's place. While a long program runs, the cut part is recoloured that way too,
-// at most every RECOLOUR_MS. Without WebGL 2, a 2D canvas draws a decimated toolpath, at
-// most twice a second.
+// of its own) at once (while the view turns, at a lower resolution), and, once the view
+// rests for TURNING_MS, the whole toolpath is drawn into a second image,
+// FULL_POINTS_PER_FRAME points a frame, which then takes the first one's place. While a
+// long program runs, the cut part is recoloured that way too, at most every RECOLOUR_MS.
+// Without WebGL 2, a 2D canvas draws a decimated toolpath, at most twice a second.
 
 import { rotation } from "./camera.js";
 import { Decimator } from "./lod.js";
@@ -31,6 +31,10 @@ const MIN_2D_REDRAW_MS = 500;
 const BIG_PATH_POINTS = 50_000;  // longer toolpaths are recoloured at most every ...
 const RECOLOUR_MS = 1000;
 const TURNING_MS = 250;  // after the last turn of the view, the whole toolpath again
+// while the view turns, a long toolpath's level of detail is drawn at 1/TURNING_SCALE of the
+// canvas's size, then shown stretched: a software renderer's time follows the length of
+// line it draws in pixels, which decimation does not shorten
+const TURNING_SCALE = 2;
 const VIEW_KEYS = ["width", "height", "ratio", "view", "colors", "limits"];
 const nextFrame = self.requestAnimationFrame ? (f) => self.requestAnimationFrame(f) : (f) => setTimeout(f, 16);
 const PATH_VERTEX = `#version 300 es
@@ -277,7 +281,7 @@ export class Renderer {
     if (this.isViewStale || (this.isLinesStale && isRecolourDue && !isLong)) {
       const look = this.look();
       if (isLong) {
-        this.paintLod(look);
+        this.paintLod(look, isTurning ? TURNING_SCALE : 1);
         this.refining = { look, points: 0 };  // the whole of it, when the view rests
       } else {
         this.clearImage(this.front, look);
@@ -315,9 +319,9 @@ export class Renderer {
     }
   }
 
-  // The level of detail, alone in the image shown.
-  paintLod(look) {
-    this.clearImage(this.front, look);
+  // The level of detail, alone in the image shown, at 1/``scale`` of the canvas's size.
+  paintLod(look, scale = 1) {
+    this.clearImage(this.front, look, scale);
     this.paintPath(this.lodVao, 0, this.lodUploaded, look);
     this.frontPoints = null;
     this.isLodGrown = false;
@@ -347,16 +351,18 @@ export class Renderer {
     this.paintPath(this.pathVao, first, count, look);
   }
 
-  // ``image`` as big as the canvas, cleared, with the machine's limits.
-  clearImage(image, look) {
+  // ``image`` as big as the canvas (1/``scale`` of it), cleared, with the machine's limits.
+  clearImage(image, look, scale = 1) {
     const gl = this.gl;
-    if (image.width !== this.canvas.width || image.height !== this.canvas.height) {
-      image.width = this.canvas.width;
-      image.height = this.canvas.height;
+    const width = Math.max(1, Math.round(this.canvas.width / scale));
+    const height = Math.max(1, Math.round(this.canvas.height / scale));
+    if (image.width !== width || image.height !== height) {
+      image.width = width;
+      image.height = height;
       gl.bindTexture(gl.TEXTURE_2D, image.texture);
       gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGBA8, image.width, image.height, 0, gl.RGBA, gl.UNSIGNED_BYTE, null);
       gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.NEAREST);
-      gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
+      gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, scale === 1 ? gl.NEAREST : gl.LINEAR);
       gl.bindFramebuffer(gl.FRAMEBUFFER, image.framebuffer);
       gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, image.texture, 0);
     }
