@@ -341,12 +341,20 @@ class Task:
         tick = self.safety.tick()
         for lost in tick.lost:
             self.operator_error(f"E-stop: {lost.reason}")
+        sent_before = self.last_motion_serial
+        is_braking = False
         if tick.estop is not None and tick.estop.stamp > self.estop_handled:
             self.estop_handled = tick.estop.stamp
-            self._estop(is_braking=tick.estop.is_braking)
+            is_braking = tick.estop.is_braking
+            self._estop(is_braking=is_braking)
         if tick.abort is not None and tick.abort.stamp > self.abort_handled:
             self.abort_handled = tick.abort.stamp
             self._abort_command(emc.EMC_TASK_ABORT())
+        if self.last_motion_serial != sent_before and not is_braking:
+            # the E-stop or abort command that follows its request is answered at once
+            # ("done already"): motion has what the request made task send by then (a
+            # braking E-stop may be for motion lost: not waited for)
+            self._await(MOTION_STATUS, "motion", self.last_motion_serial)
         return bool(tick.lost) or tick.estop is not None or tick.abort is not None
 
     def _next_command(self, timeout: float) -> emc.NMLmsg | None:
