@@ -22,8 +22,8 @@ from typing import Any
 import cnc
 from cnc.atomicfile import atomic_write_text
 from cnc.ui.formatting import parse_float
-from cnc.ui.web.jobs import at_job_priority
 from cnc.ui.web.offsets import SYSTEMS
+from cnc.ui.web.priority import at_job_priority
 from cnc.ui.web.settings import Settings
 from iocontrol.tooltable import ToolEntry, ToolTable, ToolTableError
 from nml.axes import AXIS_LETTERS

@@ -1,10 +1,10 @@
 """Work on programs that must never slow the server: preview, time estimate, editor checks.
 
 Each job is a process of its own (``python -m cnc.ui.web.jobs SPEC.json``), run at a
-lower priority (niceness ``NICE``), so that neither its CPU time nor its memory can delay a STOP
-the server must pass on, and a job that is no longer wanted is simply killed. A job writes
-its results into its folder; the server (``ProgramJobs``, in its event loop) looks at the
-folder every display cycle and tells the pages what is new:
+lower priority (``priority.JOB_NICE``), so that neither its CPU time nor its memory can
+delay a STOP the server must pass on, and a job that is no longer wanted is simply
+killed. A job writes its results into its folder; the server (``ProgramJobs``, in its
+event loop) looks at the folder every display cycle and tells the pages what is new:
 
 - ``preview.bin``: the toolpath (``preview.RECORD``s), appended while the interpreter runs,
   so a page draws a long program while it loads; ``preview.json`` when it is complete.
@@ -34,10 +34,8 @@ from pathlib import Path
 from typing import Any
 
 from cnc.atomicfile import atomic_write_text
+from cnc.ui.web.priority import at_job_priority
 
-# niceness (absolute, whatever the server's): below the server and task, iocontrol, yet
-# not starved on a busy box
-NICE = 5
 PROGRESS_EVERY_S = 5.0  # of machine time, between two estimate-progress.json
 RECORD_SIZE = 16  # preview.RECORD.size (imported lazily: the server need not load it)
 PARENT_CHECK_S = 1.0
@@ -97,12 +95,6 @@ def _end_with_the_server(server: int) -> None:
         time.sleep(PARENT_CHECK_S)
         if os.getppid() != server:
             os._exit(1)
-
-
-def at_job_priority() -> None:
-    """Take the niceness of jobs (in a job, or a [FILTER] program the server starts)."""
-    with contextlib.suppress(OSError):  # (raising it is always allowed)
-        os.setpriority(os.PRIO_PROCESS, 0, NICE)
 
 
 def main(argv: list[str]) -> int:

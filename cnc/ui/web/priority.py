@@ -16,7 +16,7 @@ priority (SCHED_FIFO 1) took it to the board within 25 ms.
 - **Worker threads** (commands that wait for the machine, file reads) run at niceness
   ``WORKER_NICE``: ahead of other programs, so one holding Python's interpreter lock is
   not left waiting for a CPU while the loop waits for the lock.
-- **Jobs** (preview, estimate, filters) run niced below everything (jobs.NICE).
+- **Jobs** (preview, estimate, filters) run niced below everything (``JOB_NICE``).
 
 Without the privilege (CAP_SYS_NICE, or RLIMIT_RTPRIO / RLIMIT_NICE from
 /etc/security/limits.conf) the server runs as it was started and says so once.
@@ -29,6 +29,9 @@ import os
 
 LOOP_RT_PRIORITY = 1
 WORKER_NICE = -10
+# absolute, whatever the server's: below the server and task, iocontrol, yet not starved
+# on a busy box
+JOB_NICE = 5
 
 
 def raise_loop_priority() -> str | None:
@@ -55,3 +58,9 @@ def raise_worker_priority() -> None:
     allowed."""
     with contextlib.suppress(OSError):
         os.setpriority(os.PRIO_PROCESS, 0, WORKER_NICE)
+
+
+def at_job_priority() -> None:
+    """Take the niceness of jobs (in a job, or as a [FILTER] program's preexec_fn)."""
+    with contextlib.suppress(OSError):  # (raising it is always allowed)
+        os.setpriority(os.PRIO_PROCESS, 0, JOB_NICE)
