@@ -372,7 +372,13 @@ class OpcuaBridge:
 
     # ------------------------------------------------------------ clients -> machine
     async def _on_write(self, event: Any, _dispatcher: Any) -> None:
-        """An accepted write of an override: carried out on the machine."""
+        """A client's accepted write of an override: carried out on the machine.
+
+        The bridge's own writes (the machine's values, each poll) call this too; they must
+        never go back to the machine: a poll that still saw the old override would undo
+        the client's."""
+        if not event.is_external:
+            return
         for write, result in zip(
             event.request_params.NodesToWrite, event.response_params, strict=False
         ):

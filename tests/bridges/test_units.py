@@ -3,6 +3,8 @@ derived from the machine's, the MQTT command checks, the launcher's restarts."""
 
 from __future__ import annotations
 
+import asyncio
+import shutil
 import sys
 import time
 from pathlib import Path
@@ -69,3 +71,42 @@ def test_a_dead_bridge_is_started_again_later(
     bridges.stop()
     assert said[0] == "starting the mqtt bridge"
     assert any("ended with status 0; the machine goes on" in line for line in said)
+
+
+def test_opcua_only_a_client_s_write_sets_an_override(tmp_path: Path) -> None:
+    """The bridge writes the machine's override into its node each time it changes; that
+    write must not be sent back to the machine (it undid a client's new value when the
+    poll ran before task had published it)."""
+    from asyncua import ua
+    from asyncua.common.callback import ServerItemCallback
+
+    from cnc.bridges.opcua import OpcuaBridge
+    from cnc.inischema import load_config
+    from tests.bridges.conftest import MACHINE
+
+    shutil.copytree(MACHINE, tmp_path / "machine")
+    ini = tmp_path / "machine" / "mill.ini"
+    ini.write_text(ini.read_text() + "\n[OPCUA]\nENABLE = 1\nUSERNAME = u\nPASSWORD = p\n")
+    bridge = OpcuaBridge(str(ini), load_config(str(ini)))
+    sent: list[tuple[str, float]] = []
+    bridge._set_override = lambda key, scale: sent.append((key, scale))
+
+    async def scenario() -> None:
+        await bridge.setup()
+        await bridge.update({"feed/override": 1.0})  # the machine's value, as a poll has it
+        assert sent == []
+        node, _kind = bridge.nodes["feed/override"]
+        write = ua.WriteValue(
+            NodeId=node.nodeid,
+            AttributeId=ua.AttributeIds.Value,
+            Value=ua.DataValue(ua.Variant(50.0, ua.VariantType.Double)),
+        )
+        params = ua.WriteParameters(NodesToWrite=[write])
+        good = [ua.StatusCode(ua.StatusCodes.Good)]
+        await bridge._on_write(ServerItemCallback(params, good, None, is_external=True), None)
+        assert sent == [("feed/override", 0.5)]
+
+    try:
+        asyncio.run(scenario())
+    finally:
+        bridge.view.close()
