@@ -31,12 +31,16 @@ the page in Debian's chromium through Playwright (skipped without them):
   Open to every line known to the listing; ``preview_s`` to every toolpath point on the
   graphics card (the preview's own interpreter run included); ``longest_task_ms``, the
   longest stretch the page's thread was busy meanwhile (PerformanceObserver "longtask",
-  over 50 ms only: 0 means none); while the view turns for 2 s (the mouse's button down
-  on the preview, then one pointer move each frame of the page), the frames the preview
-  drew (``turn_fps``), the browser's CPU time per such frame, all its processes
-  (``turn_cpu_ms_per_frame``: on a busy machine the frame rate says more about the
-  others than about the page), and the page's own frames (``turn_page_fps``) with the
-  longest gap between two (``turn_page_gap_ms_max``).
+  over 50 ms only: 0 means none); ``estimate_s`` to the run time estimated (the server's
+  job, at lower priority than the page); ``turn``: while the view turns for 2 s after the
+  estimate (the mouse's button down on the preview, then one pointer move each frame of
+  the page), the frames the preview drew (``fps``), the page's own frames (``page_fps``)
+  with the longest gap between two (``page_gap_ms_max``), the browser's CPU time per
+  frame, all its processes (``cpu_ms_per_frame``), the 8 busiest threads of the browser
+  and processes of the rest (``cpu_ms_per_frame_busiest``, per frame: the card's work is
+  the GPU process's, SwiftShader's threads without a GPU), and the points of the level of
+  detail drawn (``lod_points``); ``turn_while_estimating``, the same, turned as soon as
+  the preview is whole, if the estimate was still running (it competes for the CPU).
 - "stop": the 200,000-line program runs with listing and preview on screen; after 1 to 3
   s, STOP is pressed (mouse down on it, as a hand would); ``rest_ms``: until the machine is
   at rest (stat.current_vel 0, polled every 0.5 ms), N times: median and max, beside
@@ -321,25 +325,85 @@ TURN = """([seconds, x, y]) => new Promise((done) => {
 })"""
 
 
-def browser_cpu_s() -> float:
-    """CPU time (user + system) of every process this one started (the browser's)."""
-    children: dict[int, list[int]] = {}
-    for entry in Path("/proc").iterdir():
-        if entry.name.isdigit():
-            try:
-                fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
-            except OSError:
-                continue
-            children.setdefault(int(fields[1]), []).append(int(entry.name))
-    total, todo = 0.0, list(children.get(os.getpid(), []))
+def started_processes() -> list[tuple[int, list[bytes]]]:
+    """Every process below this one (the machine, the server, its jobs, the browser) with
+    its command's words (Chromium's processes rewrite theirs into one: split again)."""
+    found, todo = [], [os.getpid()]
     while todo:
         pid = todo.pop()
-        try:
-            total += cpu_seconds(pid)
-        except OSError:
-            continue
-        todo.extend(children.get(pid, []))
+        for task in Path(f"/proc/{pid}/task").glob("*"):
+            with contextlib.suppress(OSError):
+                todo.extend(int(child) for child in (task / "children").read_text().split())
+        if pid != os.getpid():
+            with contextlib.suppress(OSError):
+                words = Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").split()
+                found.append((pid, words))
+    return found
+
+
+def is_browser(words: list[bytes]) -> bool:
+    return bool(words) and b"chrom" in Path(words[0].decode()).name.encode()
+
+
+def browser_cpu_s() -> float:
+    """CPU time (user + system) of the browser's processes."""
+    total = 0.0
+    for pid, words in started_processes():
+        if is_browser(words):
+            with contextlib.suppress(OSError):
+                total += cpu_seconds(pid)
     return total
+
+
+def cpu_by_thread_s() -> dict[str, float]:
+    """CPU time (user + system) of each of the browser's threads, keyed "<process
+    type>/<thread name>" (Chromium's --type=..., "browser" for its first), and of each
+    other process started, keyed by its command (the machine, the server, its jobs)."""
+    found: dict[str, float] = {}
+    for pid, words in started_processes():
+        if not is_browser(words):
+            with contextlib.suppress(OSError):
+                name = " ".join(w.decode(errors="replace") for w in words[1:4])
+                found[name[:60]] = found.get(name[:60], 0.0) + cpu_seconds(pid)
+            continue
+        kind = next((w[7:].decode() for w in words if w.startswith(b"--type=")), "browser")
+        for task in Path(f"/proc/{pid}/task").glob("*"):
+            try:
+                name = (task / "comm").read_text().strip()
+                stat = (task / "stat").read_text().rsplit(")", 1)[1].split()
+            except OSError:
+                continue
+            key = f"{kind}/{name}"
+            ticks = int(stat[11]) + int(stat[12])
+            found[key] = found.get(key, 0.0) + ticks / os.sysconf("SC_CLK_TCK")
+    return found
+
+
+def turn_view(page, x: float, y: float) -> dict[str, object]:  # type: ignore[no-untyped-def]
+    """Turn the preview for 2 s (a drag); the frames drawn, and what drew them."""
+    page.mouse.move(x, y)
+    page.mouse.down()
+    cpu_before, threads_before = browser_cpu_s(), cpu_by_thread_s()
+    turn = page.evaluate(TURN, [2.0, x, y])
+    cpu_s = browser_cpu_s() - cpu_before
+    threads = cpu_by_thread_s()
+    page.mouse.up()
+    frames = max(turn["frames"], 1)
+    busiest = sorted(
+        ((t - threads_before.get(k, 0.0), k) for k, t in threads.items()), reverse=True
+    )[:8]
+    times = turn["times"]
+    gaps = [b - a for a, b in itertools.pairwise(times)]
+    return {
+        "fps": round(turn["frames"] / turn["seconds"], 1),
+        "page_fps": round(len(gaps) / max((times[-1] - times[0]) / 1000, 1e-9), 1),
+        "page_gap_ms_max": round(max(gaps, default=0.0), 1),
+        "cpu_ms_per_frame": round(cpu_s * 1000 / frames, 1),
+        "cpu_ms_per_frame_busiest": {
+            name: round(seconds * 1000 / frames, 1) for seconds, name in busiest if seconds
+        },
+        "lod_points": int(page.locator("#preview").get_attribute("data-turning-lod") or 0),
+    }
 
 
 def big_program(path: Path, lines: int) -> None:
@@ -385,24 +449,22 @@ def load_part(page, folder: Path, sizes: list[int]) -> dict[str, object]:  # typ
         longest = page.evaluate("window.benchLongest")
         box = page.locator("#preview").bounding_box()
         x, y = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
-        page.mouse.move(x, y)
-        page.mouse.down()
-        cpu_before = browser_cpu_s()
-        turn = page.evaluate(TURN, [2.0, x, y])
-        cpu_s = browser_cpu_s() - cpu_before
-        page.mouse.up()
-        times = turn["times"]
-        gaps = [b - a for a, b in itertools.pairwise(times)]
+        is_estimating = "estimating" in page.locator("#analysis").text_content()
+        turn_estimating = turn_view(page, x, y) if is_estimating else None
+        page.wait_for_function(
+            "document.getElementById('analysis').textContent.includes('estimated run time')",
+            timeout=WAIT_MS * 10, polling=100,
+        )  # fmt: skip
+        estimate_s = time.perf_counter() - start
         found[str(size)] = {
             "listing_s": round(listing_s, 2),
             "preview_s": round(preview_s, 2),
+            "estimate_s": round(estimate_s, 2),
             "points": int(page.locator("#preview").get_attribute("data-points")),
             "lod_points": int(page.locator("#preview").get_attribute("data-lod") or 0),
             "longest_task_ms": round(longest, 1),
-            "turn_fps": round(turn["frames"] / turn["seconds"], 1),
-            "turn_page_fps": round(len(gaps) / max((times[-1] - times[0]) / 1000, 1e-9), 1),
-            "turn_page_gap_ms_max": round(max(gaps, default=0.0), 1),
-            "turn_cpu_ms_per_frame": round(cpu_s * 1000 / max(turn["frames"], 1), 1),
+            "turn": turn_view(page, x, y),
+            "turn_while_estimating": turn_estimating,
         }
     return found
 

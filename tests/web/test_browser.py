@@ -528,6 +528,49 @@ def the_level_of_detail_keeps_the_shape(page) -> None:  # type: ignore[no-untype
     assert len(kept) < found["total"] / 8
 
 
+TURNING_LEVEL = """async () => {
+  // a 10,000-point spiral cut to 500 points at most; a card's pace while the view turns
+  const { levelWithin } = await import("/static/js/lod.js");
+  const { TurnPace } = await import("/static/js/renderer.js");
+  const records = new ArrayBuffer(16 * 10000);
+  const floats = new Float32Array(records), words = new Uint32Array(records);
+  for (let i = 0; i < 10000; i++) {
+    const angle = i * 0.01, radius = 1 + i * 0.001;
+    floats.set([radius * Math.cos(angle), radius * Math.sin(angle), 0], 4 * i);
+    words[4 * i + 3] = (i << 1) | 1;
+  }
+  const level = levelWithin([records], 1e-6, 500);
+  const keptWords = new Uint32Array(level.kept().slice().buffer);
+  const paced = (isSlow, intervals) => {
+    const pace = new TurnPace(isSlow);
+    let time = 1000;
+    pace.frame(time);
+    for (const interval of intervals) pace.frame(time += interval);
+    return pace.isSlow;
+  };
+  return {
+    count: level.count, first: keptWords[3] >> 1, last: keptWords[keptWords.length - 1] >> 1,
+    fast: paced(false, [16, 17, 90, 16, 120, 16, 16]),  // a fast card, a hand that hesitates
+    paused: paced(false, [16, 3000, 16, 2500, 16, 4000]),  // ... that stops and goes on
+    slow: paced(false, [16, 80, 75, 90, 85]),  // a card that cannot keep up
+    software: paced(true, []),  // known slow from the start
+  };
+}"""
+
+
+def the_turning_level_suits_the_card(page) -> None:  # type: ignore[no-untyped-def]
+    """While the view turns a slow card draws a coarser level of detail (js/lod.js
+    levelWithin, js/renderer.js TurnPace): at most the points asked, the ends kept; a card
+    is slow when turning frames keep coming slower than it would take to look smooth."""
+    found = page.evaluate(TURNING_LEVEL)
+    assert 4 < found["count"] <= 500
+    assert (found["first"], found["last"]) == (0, 9999)
+    assert not found["fast"]
+    assert not found["paused"]
+    assert found["slow"]
+    assert found["software"]
+
+
 def big_program(path: Path, lines: int) -> None:
     """A Lissajous of ``lines`` short feeds at 3000 mm/min within the test mill's limits."""
     out = ["G21 G90 G64 F3000", "G0 Z1", "G0 X0 Y9", "G1 Z-0.5 F600", "F3000"]
@@ -558,6 +601,7 @@ def test_a_200000_line_program_loads_draws_runs_and_stops(
     expect(page.locator("#preview")).to_have_attribute("data-drawn", "200005")
     assert page.locator(".listing-row").count() < 100  # only the lines in view exist
     the_level_of_detail_keeps_the_shape(page)
+    the_turning_level_suits_the_card(page)
     preview = page.locator("#preview")  # turned: drawn simplified, then whole again
     frames = int(preview.get_attribute("data-frames"))
     box = preview.bounding_box()
@@ -567,6 +611,7 @@ def test_a_200000_line_program_loads_draws_runs_and_stops(
     page.mouse.up()
     expect(preview).to_have_attribute("data-drawn", "200005")
     assert int(preview.get_attribute("data-frames")) > frames
+    assert 0 < int(preview.get_attribute("data-turning-lod")) <= 16_000
     listing.evaluate("e => { e.scrollTop = e.scrollHeight; }")
     expect(page.locator(".listing-row .code").last).to_have_text("M2")
     page.click('[data-camera="top"]')

@@ -103,6 +103,15 @@ export class Decimator {
   kept() { return new Uint8Array(this.records, 0, this.count * RECORD); }
 }
 
+// A level of detail of ``pieces`` (ArrayBuffers of records) with at most ``maxPoints``
+// points: the tolerance doubled from ``tolerance`` until they fit.
+export function levelWithin(pieces, tolerance, maxPoints) {
+  for (let level = new Decimator(tolerance); ; level = new Decimator(level.tolerance * 2)) {
+    for (const piece of pieces) level.add(piece);
+    if (level.count <= maxPoints) return level;
+  }
+}
+
 // The squared distance of point i from the segment between points a and b.
 function squaredDistance(xyz, i, a, b) {
   const ax = xyz[3 * a], ay = xyz[3 * a + 1], az = xyz[3 * a + 2];

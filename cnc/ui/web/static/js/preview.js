@@ -47,12 +47,13 @@ export class Preview {
     } });
   }
 
-  // What the worker drew: {points, drawn, renderer, frames, lod, bounds}.
+  // What the worker drew: {points, drawn, renderer, frames, lod, turningLod, bounds}.
   drawn(report) {
     this.canvas.dataset.points = report.points;
     this.canvas.dataset.drawn = report.drawn;
     this.canvas.dataset.frames = report.frames;  // ui_bench counts them
     this.canvas.dataset.lod = report.lod;  // (the level of detail's points, for ui_bench)
+    this.canvas.dataset.turningLod = report.turningLod;  // (... drawn while the view turns)
     this.canvas.dataset.renderer = report.renderer;
     if (report.bounds && JSON.stringify(report.bounds) !== JSON.stringify(this.bounds)) {
       this.bounds = report.bounds;
@@ -98,6 +99,7 @@ export class Preview {
     canvas.addEventListener("pointerdown", (event) => {
       canvas.setPointerCapture(event.pointerId);
       pointers.set(event.pointerId, [event.clientX, event.clientY]);
+      this.send({ isHeld: true });
     });
     canvas.addEventListener("pointermove", (event) => {
       const last = pointers.get(event.pointerId);
@@ -114,7 +116,10 @@ export class Preview {
       }
       turned();
     });
-    const release = (event) => pointers.delete(event.pointerId);
+    const release = (event) => {
+      pointers.delete(event.pointerId);
+      if (!pointers.size) this.send({ isHeld: false });
+    };
     canvas.addEventListener("pointerup", release);
     canvas.addEventListener("pointercancel", release);
     canvas.addEventListener("wheel", (event) => {

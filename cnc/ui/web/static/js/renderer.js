@@ -12,14 +12,15 @@
 // is there. A long toolpath (over FULL_POINTS_PER_FRAME) costs more than one frame to
 // draw whole: a change of the view (turn, pan, zoom, size, colours) draws its level of
 // detail (lod.js: the points that keep its shape, made once as it arrives, in a buffer
-// of its own) at once (while the view turns, at a lower resolution), and, once the view
+// of its own) at once (while the view turns, at a lower resolution, and on a card too
+// slow for it, TurnPace, a coarser level of its own), and, once the view
 // rests for TURNING_MS, the whole toolpath is drawn into a second image,
 // FULL_POINTS_PER_FRAME points a frame, which then takes the first one's place. While a
 // long program runs, the cut part is recoloured that way too, at most every RECOLOUR_MS.
 // Without WebGL 2, a 2D canvas draws a decimated toolpath, at most twice a second.
 
 import { rotation } from "./camera.js";
-import { Decimator } from "./lod.js";
+import { Decimator, levelWithin } from "./lod.js";
 
 const RECORD = 16;
 const FULL_POINTS_PER_FRAME = 100_000;  // what a software renderer draws in well under a frame
@@ -31,10 +32,19 @@ const MIN_2D_REDRAW_MS = 500;
 const BIG_PATH_POINTS = 50_000;  // longer toolpaths are recoloured at most every ...
 const RECOLOUR_MS = 1000;
 const TURNING_MS = 250;  // after the last turn of the view, the whole toolpath again
+// ... or this long while the hand still holds it: on a slow card a drag's moves come
+// further apart than TURNING_MS, and drawing the whole toolpath between them (a frame's
+// part of it, then from the start after the next move) slowed the turn further
+const HELD_TURNING_MS = 1000;
 // while the view turns, a long toolpath's level of detail is drawn at 1/TURNING_SCALE of the
 // canvas's size, then shown stretched: a software renderer's time follows the length of
 // line it draws in pixels, which decimation does not shorten
 const TURNING_SCALE = 2;
+// a card that draws the level of detail slower than this while the view turns gets a
+// coarser one, of TURNING_MAX_POINTS (software: about 2.3 us of CPU a segment, 2 cores)
+const SLOW_TURN_FRAME_MS = 50;
+const TURNING_MAX_POINTS = 16_000;
+const PACE_SAMPLES = 4;
 const VIEW_KEYS = ["width", "height", "ratio", "view", "colors", "limits"];
 const nextFrame = self.requestAnimationFrame ? (f) => self.requestAnimationFrame(f) : (f) => setTimeout(f, 16);
 const PATH_VERTEX = `#version 300 es
@@ -83,7 +93,8 @@ out vec4 fragment;
 void main() { fragment = texture(image, place); }`;
 
 export class Renderer {
-  // ``report(message)`` tells the page what is drawn: {points, drawn, renderer, frames, lod}.
+  // ``report(message)`` tells the page what is drawn: {points, drawn, renderer, frames, lod,
+  // turningLod}.
   constructor(canvas, report) {
     this.canvas = canvas;
     this.report = report;
@@ -96,11 +107,14 @@ export class Renderer {
     this.limits = null;  // [[xmin, xmax], [ymin, ymax], [zmin, zmax]] in work coordinates
     this.isVisible = true;
     this.turnedAt = -Infinity;
+    this.isHeld = false;  // the operator's hand holds the view (a button down on it)
     this.isDrawPending = false;
     this.frames = 0;  // frames shown (ui_bench counts them while the view turns)
+    this.turningLod = 0;  // points of the level last drawn while the view turned
     // no antialiasing: a software card pays dearly for it
     this.gl = canvas.getContext("webgl2", { antialias: false });
     this.kind = this.gl ? "webgl" : "2d";
+    this.pace = new TurnPace(Boolean(this.gl) && isSoftwareCard(this.gl));
     if (this.gl) this.setUpGl();
     this.reset();
   }
@@ -114,6 +128,8 @@ export class Renderer {
     this.bounds = null;
     this.lod = null;  // a Decimator
     this.lodUploaded = -1;  // records of the level of detail on the card
+    this.coarseFrom = -1;  // ... of which the coarse level on the card was made
+    this.coarseUploaded = 0;  // records of the coarse level on the card
     this.drawn = 0;
     this.frontPoints = 0;  // toolpath points in the image shown; null: its level of detail
     this.refining = null;  // the whole toolpath being drawn into the second image
@@ -134,7 +150,7 @@ export class Renderer {
   }
 
   set(changes) {  // any of width, height, ratio, view, colors, current, selected, tool,
-    // limits, isVisible, turned
+    // limits, isVisible, turned, isHeld
     if ("limits" in changes && JSON.stringify(changes.limits) === JSON.stringify(this.limits)) {
       delete changes.limits;  // sent with every move of the tool
     }
@@ -170,7 +186,7 @@ export class Renderer {
     if (this.gl) this.paintGl(); else this.paint2d();
     this.frames++;
     this.report({ points: this.count, drawn: this.drawn, renderer: this.kind, frames: this.frames,
-      lod: this.lod ? this.lod.count : 0 });
+      lod: this.lod ? this.lod.count : 0, turningLod: this.turningLod });
   }
 
   // ---------------------------------------------------------------- level of detail
@@ -201,6 +217,9 @@ export class Renderer {
     this.lodVao = gl.createVertexArray();
     this.lodBuffer = gl.createBuffer();
     bindRecords(gl, this.lodVao, this.lodBuffer);
+    this.coarseVao = gl.createVertexArray();
+    this.coarseBuffer = gl.createBuffer();
+    bindRecords(gl, this.coarseVao, this.coarseBuffer);
     this.front = newImage(gl);  // shown
     this.back = newImage(gl);  // the whole toolpath drawn into it, a part a frame
     this.plainVao = gl.createVertexArray();
@@ -252,6 +271,24 @@ export class Renderer {
     return this.pending.length > 0;
   }
 
+  // The level of detail drawn while the view turns: [vao, points]; on a slow card, a
+  // coarser one than the rest of the time, made from it when first needed.
+  turningLevel() {
+    if (!this.pace.isSlow || this.lodUploaded <= TURNING_MAX_POINTS) {
+      return [this.lodVao, this.lodUploaded];
+    }
+    if (this.coarseFrom !== this.lodUploaded) {
+      const gl = this.gl;
+      const coarse = levelWithin([this.lod.kept().slice().buffer], this.lod.tolerance * 2,
+        TURNING_MAX_POINTS);
+      gl.bindBuffer(gl.ARRAY_BUFFER, this.coarseBuffer);
+      gl.bufferData(gl.ARRAY_BUFFER, coarse.kept(), gl.STATIC_DRAW);
+      this.coarseFrom = this.lodUploaded;
+      this.coarseUploaded = coarse.count;
+    }
+    return [this.coarseVao, this.coarseUploaded];
+  }
+
   transform() {
     const [a, b] = rotation(this.view);
     const { scale, x, y } = this.view;
@@ -274,14 +311,18 @@ export class Renderer {
   paintGl() {
     const gl = this.gl;
     const now = performance.now();
-    const isTurning = now - this.turnedAt < TURNING_MS;
+    const isTurning = now - this.turnedAt < (this.isHeld ? HELD_TURNING_MS : TURNING_MS);
     const isUploading = this.upload();
     const isLong = this.uploaded > FULL_POINTS_PER_FRAME && this.lodUploaded > 1;
     const isRecolourDue = this.count < BIG_PATH_POINTS || now - (this.recolouredAt || 0) >= RECOLOUR_MS;
     if (this.isViewStale || (this.isLinesStale && isRecolourDue && !isLong)) {
       const look = this.look();
-      if (isLong) {
-        this.paintLod(look, isTurning ? TURNING_SCALE : 1);
+      if (isLong && isTurning) {
+        this.pace.frame(now);
+        this.paintLod(look, TURNING_SCALE, ...this.turningLevel());
+        this.refining = { look, points: 0 };  // the whole of it, when the view rests
+      } else if (isLong) {
+        this.paintLod(look);
         this.refining = { look, points: 0 };  // the whole of it, when the view rests
       } else {
         this.clearImage(this.front, look);
@@ -301,7 +342,7 @@ export class Renderer {
     if (this.refining && !isTurning) {
       this.refine();
     } else if (this.frontPoints !== null && this.frontPoints < this.uploaded) {
-      this.paintMore(this.front, this.frontPoints, this.look());  // what arrived
+      this.paintMore(this.front, this.frontPoints, this.look());
       this.frontPoints = Math.min(this.uploaded, this.frontPoints + FULL_POINTS_PER_FRAME);
     }
     this.drawn = this.frontPoints === null ? 0 : this.frontPoints;
@@ -319,12 +360,14 @@ export class Renderer {
     }
   }
 
-  // The level of detail, alone in the image shown, at 1/``scale`` of the canvas's size.
-  paintLod(look, scale = 1) {
+  // A level of detail (``points`` in ``vao``), alone in the image shown, at 1/``scale`` of
+  // the canvas's size.
+  paintLod(look, scale = 1, vao = this.lodVao, points = this.lodUploaded) {
     this.clearImage(this.front, look, scale);
-    this.paintPath(this.lodVao, 0, this.lodUploaded, look);
+    this.paintPath(vao, 0, points, look);
     this.frontPoints = null;
     this.isLodGrown = false;
+    this.turningLod = scale === 1 ? 0 : points;
   }
 
   // One frame's part of the whole toolpath into the second image; when it is all there,
@@ -445,6 +488,36 @@ export class Renderer {
     g.beginPath(); g.arc(tx, ty, 6, 0, 2 * Math.PI); g.stroke();
     this.drawn = this.count;
   }
+}
+
+// Whether the card is too slow for the level of detail while the view turns: a software
+// renderer is from the start; another once the shortest of the last PACE_SAMPLES
+// intervals between turning frames (a drag moves the view every frame of the page; a fast
+// card keeps up) is over SLOW_TURN_FRAME_MS. Once slow, always slow: the card does not get
+// faster, and the coarse level's pace would say nothing about the other's.
+export class TurnPace {
+  constructor(isSlow = false) {
+    this.isSlow = isSlow;
+    this.last = -Infinity;
+    this.intervals = [];
+  }
+
+  frame(time) {
+    if (time - this.last < 4 * TURNING_MS) {  // (longer: the hand paused)
+      this.intervals.push(time - this.last);
+      if (this.intervals.length > PACE_SAMPLES) this.intervals.shift();
+      this.isSlow ||= this.intervals.length === PACE_SAMPLES
+        && Math.min(...this.intervals) > SLOW_TURN_FRAME_MS;
+    }
+    this.last = time;
+  }
+}
+
+// Whether the browser draws WebGL on the CPU (its own SwiftShader, Mesa's llvmpipe, ...).
+export function isSoftwareCard(gl) {
+  const info = gl.getExtension("WEBGL_debug_renderer_info");
+  const name = gl.getParameter(info ? info.UNMASKED_RENDERER_WEBGL : gl.RENDERER);
+  return /swiftshader|llvmpipe|softpipe|software|basic render/i.test(String(name));
 }
 
 // Records (RECORD) in ``buffer`` as the path program's inputs, in ``vao``.
