@@ -1,11 +1,16 @@
 """The web server's scheduling (cnc/ui/web/priority.py): its event loop thread at the
-lowest realtime priority when allowed, what it starts ordinary again."""
+lowest realtime priority when allowed, what it starts ordinary again, a job's preview and
+estimate below everything, in a session of their own."""
 
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
+from pathlib import Path
+
+from cnc.ui.web.priority import ESTIMATE_NICE, JOB_NICE
 
 PROBE = """
 import json, os, threading
@@ -40,3 +45,52 @@ def test_the_event_loop_runs_realtime_and_what_it_starts_does_not() -> None:
     else:
         assert "realtime priority" in found["problem"]
         assert found["loop"] == 0
+
+
+JOB_PROBE = """
+import json, os, sys
+from pathlib import Path
+import cnc.ui.estimate, cnc.ui.web.preview
+from cnc.ui.web import jobs
+seen = {}
+def where():
+    group = Path("/proc/self/autogroup")
+    return {"nice": os.getpriority(os.PRIO_PROCESS, 0), "is_leader": os.getsid(0) == os.getpid(),
+            "group": group.read_text().split()[-1] if group.exists() else None}
+real_preview = cnc.ui.web.preview.preview
+def preview(*args, **kwargs):
+    seen["preview"] = where()
+    return real_preview(*args, **kwargs)
+def estimate(*args, **kwargs):
+    seen["estimate"] = where()
+    return cnc.ui.estimate.Estimate()
+cnc.ui.web.preview.preview = preview
+cnc.ui.estimate.estimate = estimate
+status = jobs.main([sys.argv[1]])
+print(json.dumps(seen | {"status": status}))
+"""
+
+
+def test_a_job_s_preview_and_estimate_yield_to_everything_else(tmp_path: Path) -> None:
+    """In a session of its own (with the kernel's autogroup scheduling, niceness counts
+    only within a session), the preview at JOB_NICE, the estimate lower still."""
+    machine = Path(__file__).parents[1] / "halui" / "machine"
+    (tmp_path / "p.ngc").write_text("G0 X1\nG1 X2 F100\nM2\n")
+    spec = {
+        "kind": "preview",
+        "folder": str(tmp_path),
+        "program": str(tmp_path / "p.ngc"),
+        "ini": str(machine / "mill.ini"),
+    }
+    (tmp_path / "spec.json").write_text(json.dumps(spec))
+    done = subprocess.run(
+        [sys.executable, "-c", JOB_PROBE, str(tmp_path / "spec.json")],
+        capture_output=True, text=True, timeout=60, check=True,
+    )  # fmt: skip
+    found = json.loads(done.stdout.splitlines()[-1])
+    assert found["status"] == 0, done.stderr
+    assert found["preview"]["nice"] == JOB_NICE
+    assert found["estimate"]["nice"] == ESTIMATE_NICE
+    assert found["preview"]["is_leader"]
+    if found["preview"]["group"] is not None and os.geteuid() == 0:  # (else rate-limited)
+        assert (found["preview"]["group"], found["estimate"]["group"]) == ("5", "15")

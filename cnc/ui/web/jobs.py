@@ -34,7 +34,7 @@ from pathlib import Path
 from typing import Any
 
 from cnc.atomicfile import atomic_write_text
-from cnc.ui.web.priority import at_job_priority
+from cnc.ui.web.priority import at_estimate_priority, at_job_priority
 
 PROGRESS_EVERY_S = 5.0  # of machine time, between two estimate-progress.json
 RECORD_SIZE = 16  # preview.RECORD.size (imported lazily: the server need not load it)
@@ -82,6 +82,7 @@ def run_job(spec: dict[str, Any]) -> None:
             next_report[0] = machine_s + PROGRESS_EVERY_S
             _write_json(folder / "estimate-progress.json", {"machine_s": round(machine_s, 1)})
 
+    at_estimate_priority()
     found = estimate(spec["program"], ini_path, start=spec.get("start"), progress=progress)
     import numpy as np
 
