@@ -94,3 +94,28 @@ def test_a_job_s_preview_and_estimate_yield_to_everything_else(tmp_path: Path) -
     assert found["preview"]["is_leader"]
     if found["preview"]["group"] is not None and os.geteuid() == 0:  # (else rate-limited)
         assert (found["preview"]["group"], found["estimate"]["group"]) == ("5", "15")
+
+
+WATCH_PROBE = """
+import asyncio, json, sys, threading
+from cnc.ui.web.priority import watch_jobs_without_threads
+watch_jobs_without_threads()
+async def job():
+    process = await asyncio.create_subprocess_exec(
+        sys.executable, "-c", "import time; time.sleep(0.3)"
+    )
+    threads = threading.active_count()
+    return threads, await process.wait()
+print(json.dumps(asyncio.run(job())))
+"""
+
+
+def test_the_loop_starts_no_thread_to_watch_a_job() -> None:
+    """A new thread makes the realtime loop wait until it has run once: a job's end comes
+    through a pidfd instead (Python 3.11's asyncio started a thread for each)."""
+    done = subprocess.run(
+        [sys.executable, "-c", WATCH_PROBE], capture_output=True, text=True, timeout=60,
+        check=True,
+    )  # fmt: skip
+    threads, status = json.loads(done.stdout)
+    assert (threads, status) == (1, 0)

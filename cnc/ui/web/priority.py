@@ -13,6 +13,8 @@ priority (SCHED_FIFO 1) took it to the board within 25 ms.
   program, below motion's and HAL's threads (which keep the machine moving and braking).
   Its work is light (status to the pages, small answers); what is heavy runs elsewhere.
   ``SCHED_RESET_ON_FORK``: threads and processes it starts are ordinary again.
+  Starting a thread would make it wait for the new one: jobs are watched without one
+  (``watch_jobs_without_threads``).
 - **Worker threads** (commands that wait for the machine, file reads) run at niceness
   ``WORKER_NICE``: ahead of other programs, so one holding Python's interpreter lock is
   not left waiting for a CPU while the loop waits for the lock.
@@ -28,8 +30,10 @@ Without the privilege (CAP_SYS_NICE, or RLIMIT_RTPRIO / RLIMIT_NICE from
 
 from __future__ import annotations
 
+import asyncio
 import contextlib
 import os
+import sys
 
 LOOP_RT_PRIORITY = 1
 WORKER_NICE = -10
@@ -56,6 +60,20 @@ def raise_loop_priority() -> str | None:
         "a STOP from a page may wait for a CPU (allow it with CAP_SYS_NICE or an rtprio "
         "limit in /etc/security/limits.conf)"
     )
+
+
+def watch_jobs_without_threads() -> None:
+    """The loop learns of its jobs' ends through pidfds, not a thread each (Python 3.11's
+    way): starting a thread makes the realtime loop wait until the new, ordinary thread
+    has run once, which on a busy computer may wait for a CPU (seen: 35 ms). Python 3.12
+    does this itself; kernels before 5.3 keep the threads."""
+    if sys.version_info >= (3, 12) or not hasattr(os, "pidfd_open"):
+        return
+    try:
+        os.close(os.pidfd_open(os.getpid()))
+    except OSError:
+        return
+    asyncio.set_child_watcher(asyncio.PidfdChildWatcher())
 
 
 def raise_worker_priority() -> None:

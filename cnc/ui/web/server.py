@@ -61,7 +61,7 @@ from cnc.ini import IniError
 from cnc.ui.controller import running_ini
 from cnc.ui.web.hub import Client, Hub, send
 from cnc.ui.web.jobs import RECORD_SIZE
-from cnc.ui.web.priority import raise_loop_priority
+from cnc.ui.web.priority import raise_loop_priority, watch_jobs_without_threads
 from cnc.ui.web.settings import Settings
 
 STATIC = Path(__file__).with_name("static")
@@ -444,6 +444,7 @@ def main(argv: list[str]) -> int:
         )
         return 2
     problem = raise_loop_priority()  # (before any thread starts)
+    watch_jobs_without_threads()
     if problem:
         print(f"cnc ui web: {problem}", file=sys.stderr, flush=True)
     hosts = HostCheck(args.host, settings.allowed_hosts)
