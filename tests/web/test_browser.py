@@ -619,6 +619,8 @@ def test_a_200000_line_program_loads_draws_runs_and_stops(
     machine.until(lambda s: s.current_vel > 0 and s.motion_line > 10)
     expect(page.locator("#state")).to_have_text("RUNNING")
     expect(page.locator(".listing-row.current")).to_have_count(1)  # followed
+    # its estimate takes minutes: meanwhile the share of the lines run
+    expect(page.locator("#progress-text")).to_contain_text(re.compile(r"\d\.\d % of the lines"))
     page.keyboard.press("p")  # pause: one word, never "PAUSED (paused)"
     expect(page.locator("#state")).to_have_text("PAUSED")
     expect(page.locator("#state-detail")).to_contain_text("Resume to continue")

@@ -83,8 +83,24 @@ def test_without_an_estimate_the_run_shows_its_time_only() -> None:
     tracker = JobTracker()
     program = analysis(is_done=False)
     job, _ = tracker.update(status(line=2), program, 0.0)
-    assert job == {"file": FILE, "elapsed_s": 0, "progress": None, "remaining_s": None,
-                   "estimate_s": None}  # fmt: skip
+    assert job == {"file": FILE, "elapsed_s": 0, "progress": None, "progress_by": None,
+                   "remaining_s": None, "estimate_s": None}  # fmt: skip
+
+
+def test_until_the_estimate_is_done_progress_counts_lines() -> None:
+    """A program of a million lines takes minutes to estimate: meanwhile the share of its
+    lines run (from the start line to the preview's end line)."""
+    tracker = JobTracker()
+    program = analysis(is_done=False)
+    program.preview = {"end_line": 11, "error": None}  # the preview is done, not the estimate
+    tracker.expect_start(1, 0.0)
+    job, _ = tracker.update(status(line=1), program, 0.0)
+    assert (job["progress"], job["progress_by"], job["remaining_s"]) == (0.0, "lines", None)
+    job, _ = tracker.update(status(line=6), program, 5.0)
+    assert (job["progress"], job["progress_by"]) == (0.5, "lines")
+    done = analysis()  # the estimate arrives: its time from then on
+    job, _ = tracker.update(status(line=6), done, 6.0)
+    assert job["progress_by"] == "time" and job["estimate_s"] == 100.0
 
 
 def test_the_end_text_says_what_happened() -> None:

@@ -7,7 +7,9 @@ progress comes from the program's time estimate (``cnc.ui.estimate``, through
 ``jobs.ProgramAnalysis``): the estimated time at which the machine reaches the line it
 executes, over the estimated total. The remaining time is the estimate's rest, scaled by
 how the run has gone so far (overrides, pauses in motion) once it has run long enough to
-tell. At the end the page gets a notice with the run time next to the estimate, and the run
+tell. Until the estimate is done (minutes for a program of a million lines) the progress
+is the share of the program's lines run (``progress_by`` says which). At the end the page
+gets a notice with the run time next to the estimate, and the run
 joins the history ([DISPLAY]JOB_HISTORY_FILE, JSON, written atomically; the newest first).
 
 A run is "finished" when the interpreter reached the program's end line (the preview's:
@@ -134,11 +136,21 @@ class JobTracker:
             "file": job.file,
             "elapsed_s": round(job.run_s + job.paused_s),
             "progress": None,
+            "progress_by": None,  # "time" (the estimate's) or "lines" (until it is done)
             "remaining_s": None,
             "estimate_s": None,
         }
-        if analysis is None or analysis.file != job.file or analysis.total_s is None:
+        if analysis is None or analysis.file != job.file:
             return shown
+        if analysis.total_s is None:
+            end_line = (analysis.preview or {}).get("end_line")
+            if not end_line or end_line <= job.start_line:
+                return shown
+            done = min(max(line - job.start_line, 0), end_line - job.start_line)
+            return shown | {
+                "progress": round(done / (end_line - job.start_line), 4),
+                "progress_by": "lines",
+            }
         start, end = analysis.span_of(line) or (0.0, 0.0)
         if line != self._line:  # the run time on this line counts towards its part
             self._line, self._line_entered_s = line, job.run_s
@@ -152,6 +164,7 @@ class JobTracker:
         job.estimate_s = part_s
         return shown | {
             "progress": round(done_s / part_s, 4),
+            "progress_by": "time",
             "remaining_s": round((part_s - done_s) * rate),
             "estimate_s": round(part_s, 1),
         }

@@ -258,7 +258,9 @@ function showProgress(job) {
   bar.style.width = `${percent ?? 0}%`;
   $("bar-progress").querySelector("span").style.width = `${percent ?? 0}%`;
   $("bar-progress").title = percent === null ? "running" : `${percent} %`;
-  const parts = [percent === null ? "progress: estimating…" : `${percent.toFixed(1)} %`,
+  const parts = [percent === null ? "progress: estimating…"
+    : job.progress_by === "lines" ? `${percent.toFixed(1)} % of the lines (estimating the time…)`
+      : `${percent.toFixed(1)} %`,
     `${duration(job.elapsed_s)} elapsed`];
   if (job.remaining_s !== null) parts.push(`about ${duration(job.remaining_s)} left`);
   if (job.estimate_s !== null) parts.push(`estimate ${duration(job.estimate_s)}`);
