@@ -23,7 +23,9 @@ import { rotation } from "./camera.js";
 import { Decimator, levelWithin } from "./lod.js";
 
 const RECORD = 16;
-const FULL_POINTS_PER_FRAME = 100_000;  // what a software renderer draws in well under a frame
+// the whole toolpath is drawn this many points a frame (a software renderer takes about
+// 2.3 us of CPU a segment, shared by its threads: a 1M-line program comes back in 10 frames)
+const FULL_POINTS_PER_FRAME = 100_000;
 const LOD_TOLERANCE = 1 / 1500;  // of the toolpath's diagonal: about a pixel when fitted
 const LOD_MAX_POINTS = 120_000;  // over this, a coarser level of detail
 const UPLOAD_BYTES_PER_FRAME = 8 << 20;
@@ -37,8 +39,7 @@ const TURNING_MS = 250;  // after the last turn of the view, the whole toolpath 
 // part of it, then from the start after the next move) slowed the turn further
 const HELD_TURNING_MS = 1000;
 // while the view turns, a long toolpath's level of detail is drawn at 1/TURNING_SCALE of the
-// canvas's size, then shown stretched: a software renderer's time follows the length of
-// line it draws in pixels, which decimation does not shorten
+// canvas's size, then shown stretched: fewer pixels to fill and to show
 const TURNING_SCALE = 2;
 // a card that draws the level of detail slower than this while the view turns gets a
 // coarser one, of TURNING_MAX_POINTS (software: about 2.3 us of CPU a segment, 2 cores)
