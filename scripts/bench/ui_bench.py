@@ -41,9 +41,10 @@ the page in Debian's chromium through Playwright (skipped without them):
   the GPU process's, SwiftShader's threads without a GPU), and the points of the level of
   detail drawn (``lod_points``); ``turn_while_estimating``, the same, turned as soon as
   the preview is whole, if the estimate was still running (it competes for the CPU).
-- "stop": the 200,000-line program runs with listing and preview on screen; after 1 to 3
-  s, STOP is pressed (mouse down on it, as a hand would); ``rest_ms``: until the machine is
-  at rest (stat.current_vel 0, polled every 0.5 ms), N times: median and max, beside
+- "stop": the 200,000-line program (``--stop-lines``) runs with listing and preview on
+  screen; after 1 to 3 s, STOP is pressed (mouse down on it, as a hand would);
+  ``rest_ms``: until the machine is at rest (stat.current_vel 0, polled every 0.5 ms), N
+  times: median and max, beside
   ``braking_ms``, what braking from the speed of the moment takes at the machine's
   acceleration (the rest is the command's way there); ``taken_ms``, from the press until
   task took the abort (its interpreter idle), and ``page_wait_ms_max``, how long a press
@@ -477,12 +478,12 @@ def _until_zero(hal: Hal, pin: dict, timeout: float = 30) -> float:
     return time.time()
 
 
-def stop_part(page, folder: Path, count: int, max_acc: float) -> dict[str, object]:  # type: ignore[no-untyped-def]
+def stop_part(page, folder: Path, count: int, max_acc: float, lines: int) -> dict[str, object]:  # type: ignore[no-untyped-def]
     import cnc
 
-    name = "lissajous_200000.ngc"
+    name = f"lissajous_{lines}.ngc"
     if not (folder / name).exists():
-        big_program(folder / name, 200_000)
+        big_program(folder / name, lines)
     open_program(page, name)
     page.wait_for_function(
         "(() => { const p = document.getElementById('preview').dataset;"
@@ -642,7 +643,9 @@ def machine_parts(args: argparse.Namespace, parts: set[str]) -> dict[str, object
                     if "load" in parts:
                         results["load"] = load_part(page, folder, args.sizes)
                     if "stop" in parts:
-                        results["stop"] = stop_part(page, folder, args.stops, 508.0)
+                        results["stop"] = stop_part(
+                            page, folder, args.stops, 508.0, args.stop_lines
+                        )
                     browser.close()
             finally:
                 server.send_signal(signal.SIGTERM)
@@ -662,6 +665,7 @@ def main() -> int:
     parser.add_argument("--dialogs", type=int, default=20, help="message dialogs to time")
     parser.add_argument("--sizes", default="20000,200000,1000000", help="program lines")
     parser.add_argument("--stops", type=int, default=5, help="STOP presses to time")
+    parser.add_argument("--stop-lines", type=int, default=200_000, help="the program's lines")
     parser.add_argument(
         "--programs", nargs="*",
         default=sorted(path.stem for path in PROGRAMS.glob("*.ngc")),
