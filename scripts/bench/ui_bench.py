@@ -115,8 +115,8 @@ def free_port() -> int:
         return probe.getsockname()[1]
 
 
-def cpu_seconds(pid: int) -> float:
-    """User + system time of a process, from /proc."""
+def cpu_seconds(pid: int | str) -> float:
+    """User + system time of a process (or a thread: "PID/task/TID"), from /proc."""
     fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
@@ -370,13 +370,10 @@ def cpu_by_thread_s() -> dict[str, float]:
         kind = next((w[7:].decode() for w in words if w.startswith(b"--type=")), "browser")
         for task in Path(f"/proc/{pid}/task").glob("*"):
             try:
-                name = (task / "comm").read_text().strip()
-                stat = (task / "stat").read_text().rsplit(")", 1)[1].split()
+                key = f"{kind}/{(task / 'comm').read_text().strip()}"
+                found[key] = found.get(key, 0.0) + cpu_seconds(f"{pid}/task/{task.name}")
             except OSError:
                 continue
-            key = f"{kind}/{name}"
-            ticks = int(stat[11]) + int(stat[12])
-            found[key] = found.get(key, 0.0) + ticks / os.sysconf("SC_CLK_TCK")
     return found
 
 

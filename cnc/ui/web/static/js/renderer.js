@@ -13,11 +13,11 @@
 // draw whole: a change of the view (turn, pan, zoom, size, colours) draws its level of
 // detail (lod.js: the points that keep its shape, made once as it arrives, in a buffer
 // of its own) at once (while the view turns, at a lower resolution, and on a card too
-// slow for it, TurnPace, a coarser level of its own), and, once the view
-// rests for TURNING_MS, the whole toolpath is drawn into a second image,
-// FULL_POINTS_PER_FRAME points a frame, which then takes the first one's place. While a
-// long program runs, the cut part is recoloured that way too, at most every RECOLOUR_MS.
-// Without WebGL 2, a 2D canvas draws a decimated toolpath, at most twice a second.
+// slow for it, TurnPace, a coarser level of its own), and, once the view rests for
+// TURNING_MS, the whole toolpath is drawn into a second image, FULL_POINTS_PER_FRAME
+// points a frame, which then takes the first one's place. While a long program runs, the
+// cut part is recoloured that way too, at most every RECOLOUR_MS. Without WebGL 2, a 2D
+// canvas draws a decimated toolpath, at most twice a second.
 
 import { rotation } from "./camera.js";
 import { Decimator, levelWithin } from "./lod.js";
@@ -318,12 +318,13 @@ export class Renderer {
     const isRecolourDue = this.count < BIG_PATH_POINTS || now - (this.recolouredAt || 0) >= RECOLOUR_MS;
     if (this.isViewStale || (this.isLinesStale && isRecolourDue && !isLong)) {
       const look = this.look();
-      if (isLong && isTurning) {
-        this.pace.frame(now);
-        this.paintLod(look, TURNING_SCALE, ...this.turningLevel());
-        this.refining = { look, points: 0 };  // the whole of it, when the view rests
-      } else if (isLong) {
-        this.paintLod(look);
+      if (isLong) {
+        if (isTurning) {
+          this.pace.frame(now);
+          this.paintLod(look, TURNING_SCALE, ...this.turningLevel());
+        } else {
+          this.paintLod(look);
+        }
         this.refining = { look, points: 0 };  // the whole of it, when the view rests
       } else {
         this.clearImage(this.front, look);
@@ -343,7 +344,7 @@ export class Renderer {
     if (this.refining && !isTurning) {
       this.refine();
     } else if (this.frontPoints !== null && this.frontPoints < this.uploaded) {
-      this.paintMore(this.front, this.frontPoints, this.look());
+      this.paintMore(this.front, this.frontPoints, this.look());  // what arrived
       this.frontPoints = Math.min(this.uploaded, this.frontPoints + FULL_POINTS_PER_FRAME);
     }
     this.drawn = this.frontPoints === null ? 0 : this.frontPoints;
