@@ -22,17 +22,21 @@ whoever changes the buffer posts every waiting slot. No polling loop.
 Robustness: the mutex holder's pid is recorded. A waiter that cannot get the mutex checks
 whether the holder still lives; if it died, the waiter repairs the buffer (an interrupted
 status write is discarded, a queue is consistent by construction because the tail moves
-last) and releases the mutex, logging what happened. Corrupt content raises
+last) and releases the mutex, logging what happened. A live holder never keeps it by accident:
+signals are held back while a thread holds it, so no handler (Ctrl-C's KeyboardInterrupt, a
+SIGTERM handler's SystemExit) raises inside the critical section. Corrupt content raises
 ``NmlFormatError`` naming the buffer and never crashes the reader.
 """
 
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import logging
 import math
 import mmap
 import os
+import signal
 import struct
 import time
 from dataclasses import dataclass
@@ -58,6 +62,46 @@ LOCK_HELD_REPORT_S = 1.0
 # A status write that stays "in progress" this long with nobody holding the mutex was not
 # a write: the sequence counter is corrupt, and the reader resets the buffer.
 _STUCK_WRITE_S = 0.05
+
+# Signals held back while this thread holds a buffer's mutex. A Python signal handler runs
+# between two bytecodes of the main thread and may raise (Ctrl-C's KeyboardInterrupt): raised
+# just after the mutex was taken, before the code that releases it, it leaves the mutex taken
+# by a live process. A UI that goes on after Ctrl-C (``cnc sh``) then waits for itself forever
+# at its next read, and every other process (task writing an error) waits for it. Held back,
+# a signal is delivered when the mutex is released, outside the critical section. The faults
+# a thread raises itself (SIGSEGV...) and SIGABRT (faulthandler's dump) stay deliverable.
+_HELD_BACK_SIGNALS = frozenset(signal.valid_signals()) - {
+    signal.SIGKILL,
+    signal.SIGSTOP,
+    signal.SIGSEGV,
+    signal.SIGBUS,
+    signal.SIGFPE,
+    signal.SIGILL,
+    signal.SIGTRAP,
+    signal.SIGSYS,
+    signal.SIGABRT,
+}
+# libc's pthread_sigmask: signal.pthread_sigmask turns every mask it returns into a set of
+# enum members, ~110 us for a lock and unlock holding back this many signals; this is 2-5 us.
+_pthread_sigmask = ctypes.CDLL(None, use_errno=True).pthread_sigmask
+_SigSet = ctypes.c_uint64 * 16  # glibc's sigset_t (signal n is bit n - 1 of word 0)
+_SIG_BLOCK, _SIG_UNBLOCK = 0, 1
+_HELD_BACK_BITS = sum(1 << (number - 1) for number in _HELD_BACK_SIGNALS)
+_HELD_BACK_SET = _SigSet(_HELD_BACK_BITS)
+
+
+def _hold_back_signals() -> int:
+    """Block _HELD_BACK_SIGNALS in this thread; the bits of those this call blocked."""
+    before = _SigSet()
+    _pthread_sigmask(_SIG_BLOCK, _HELD_BACK_SET, before)
+    return _HELD_BACK_BITS & ~before[0]
+
+
+def _let_signals_through(bits: int) -> None:
+    """Unblock the signals ``_hold_back_signals`` blocked: a pending one is delivered now."""
+    if bits:
+        _pthread_sigmask(_SIG_UNBLOCK, _SigSet(bits), None)
+
 
 # Header fields: name -> (offset, struct format). All offsets are 8-byte aligned.
 _HEADER_FIELDS = {
@@ -210,6 +254,7 @@ class ShmBuffer:
         self._slot = -1
         self._last_seen = 0
         self._is_locked = False
+        self._held_back = 0  # the signals _lock held back, let through by _unlock
         self._reported_holder = 0  # the stuck lock holder last logged
         self._mm: mmap.mmap | None = None
         self._view: memoryview | None = None
@@ -478,9 +523,21 @@ class ShmBuffer:
     # ------------------------------------------------------------------ mutex
     def _lock(self, timeout: float | None = None) -> None:
         """Take the mutex within the P-line timeout (NML-031), repairing after dead holders;
-        a live holder that keeps it past LOCK_HELD_REPORT_S is logged with its pid."""
+        a live holder that keeps it past LOCK_HELD_REPORT_S is logged with its pid. Signals
+        are held back until ``_unlock`` (see _HELD_BACK_SIGNALS)."""
         limit = self.timeout if timeout is None else timeout
         deadline = None if math.isinf(limit) else time.monotonic() + limit
+        held_back = _HELD_BACK_BITS  # (if a handler raises as they are blocked: all)
+        try:
+            held_back = _hold_back_signals()
+            self._acquire_mutex(limit, deadline, held_back)
+        except BaseException:
+            _let_signals_through(held_back)
+            raise
+        self._held_back = held_back
+        self._is_locked = True
+
+    def _acquire_mutex(self, limit: float, deadline: float | None, held_back: int) -> None:
         while True:
             wait = _LOCK_SLICE_S
             if deadline is not None:
@@ -490,6 +547,10 @@ class ShmBuffer:
             except posix_ipc.SignalError:
                 continue  # interrupted by a signal whose handler has run: wait again
             except posix_ipc.BusyError:
+                # Not holding it, this thread may take its signals: Ctrl-C ends a wait
+                # for a stuck holder.
+                _let_signals_through(held_back)
+                _hold_back_signals()
                 if self._repair_after_dead_holder():
                     continue
                 holder = self.lock_holder()
@@ -501,9 +562,21 @@ class ShmBuffer:
                         f"({self._describe_holder()})"
                     ) from None
                 continue
-            self._put("holder_pid", _pid)
-            self._put("locked_at", time.monotonic_ns())
-            self._is_locked = True
+            except (posix_ipc.Error, OSError):
+                raise  # the wait failed (the semaphore is gone): not taken
+            except BaseException:
+                # Only a handler run as the wait returned raises anything else (this thread
+                # cannot be interrupted by a held-back signal, but another thread of the
+                # process can receive it and the main thread then runs its handler): the
+                # wait had succeeded.
+                self._mutex.release()
+                raise
+            try:
+                self._put("holder_pid", _pid)
+                self._put("locked_at", time.monotonic_ns())
+            except BaseException:
+                self._mutex.release()
+                raise
             return
 
     def lock_holder(self) -> tuple[int, float] | None:
@@ -536,6 +609,7 @@ class ShmBuffer:
         self._put("holder_pid", 0)
         self._is_locked = False
         self._mutex.release()
+        _let_signals_through(self._held_back)
 
     def _repair_after_dead_holder(self) -> bool:
         """If the mutex holder died, repair the buffer and free the mutex; True if done."""

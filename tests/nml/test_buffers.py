@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import dataclasses
+import os
 import random
+import signal
 import threading
 import time
 
@@ -36,6 +38,23 @@ P late q LOCAL localhost R 0 0.3 0 3
 @pytest.fixture
 def cfg() -> NmlConfig:
     return parse(NML, "test.nml")
+
+
+def hold_lock(buffer: ShmBuffer, seconds: float) -> threading.Thread:
+    """Another thread takes ``buffer``'s mutex and keeps it ``seconds`` (a busy process);
+    returns once it holds it."""
+    is_held = threading.Event()
+
+    def hold() -> None:
+        buffer._lock()
+        is_held.set()
+        time.sleep(seconds)
+        buffer._unlock()
+
+    holder = threading.Thread(target=hold)
+    holder.start()
+    assert is_held.wait(5)
+    return holder
 
 
 def test_queue_is_fifo_and_each_message_is_read_once(opened) -> None:
@@ -162,9 +181,7 @@ def test_blocking_read_waits_for_a_busy_lock_even_with_a_zero_p_line_timeout(ope
     impatient = opened("w", "q")  # timeout 0: a plain write fails at once when busy
     reader = ShmBuffer(master.config, dataclasses.replace(impatient.process, ops="RW"))
     try:
-        master._lock()
-        releaser = threading.Timer(0.2, master._unlock)
-        releaser.start()
+        releaser = hold_lock(master, 0.2)
         with pytest.raises(NmlTimeoutError):
             impatient.write(TEST_CMD())
         assert reader.blocking_read(0.1) is None  # still busy: a timeout, not an error
@@ -293,9 +310,6 @@ def test_a_writer_repairs_a_corrupt_queue_and_its_message_goes_in(opened) -> Non
 
 
 def test_a_signal_during_a_blocking_read_ends_the_wait_cleanly(opened) -> None:
-    import os
-    import signal
-
     opened("m", "q")
     reader = opened("r", "q")
     received = []
@@ -335,9 +349,65 @@ def test_peek_into_checks_what_it_copies(opened) -> None:
 def test_a_write_can_wait_longer_than_its_p_line_says(opened) -> None:
     master = opened("m", "q")
     impatient = opened("w", "q")  # P-line timeout 0
-    master._lock()
-    threading.Timer(0.2, master._unlock).start()
+    holder = hold_lock(master, 0.2)
     with pytest.raises(NmlTimeoutError):
         impatient.write(TEST_CMD())
     assert impatient.write(TEST_CMD(index=8), timeout=5) > 0  # waits for the lock
     assert master.read().index == 8
+    holder.join()
+
+
+class HandlerError(Exception):
+    """What the tests' signal handler raises, as Ctrl-C's raises KeyboardInterrupt."""
+
+
+def raise_handler_error(*_: object) -> None:
+    raise HandlerError
+
+
+def test_a_handler_raising_as_the_mutex_is_taken_leaves_it_free(opened) -> None:
+    """A signal whose handler raises, arriving as the mutex is taken, is held back until
+    the write is done and the mutex free (it left the mutex taken by this live process)."""
+    master, reader = opened("m", "q"), opened("r", "q")
+    mutex = master._mutex
+
+    class SignalledAsTaken:
+        def acquire(self, timeout: float | None = None) -> None:
+            mutex.acquire(timeout)
+            os.kill(os.getpid(), signal.SIGUSR1)  # Ctrl-C comes now
+
+        def __getattr__(self, name: str) -> object:
+            return getattr(mutex, name)
+
+    mask = signal.pthread_sigmask(signal.SIG_BLOCK, ())
+    previous = signal.signal(signal.SIGUSR1, raise_handler_error)
+    master._mutex = SignalledAsTaken()
+    try:
+        with pytest.raises(HandlerError):
+            master.write(TEST_CMD(index=3))
+    finally:
+        signal.signal(signal.SIGUSR1, previous)
+        master._mutex = mutex
+    assert master.lock_holder() is None
+    assert reader.read().index == 3  # written before the handler ran
+    assert signal.pthread_sigmask(signal.SIG_BLOCK, ()) == mask  # nothing left held back
+
+
+def test_a_signal_ends_a_wait_for_a_mutex_a_live_holder_keeps(opened) -> None:
+    """Ctrl-C ends a wait for a stuck holder's mutex (signals are held back only while the
+    mutex is held), and the mutex is the holder's until it lets it go."""
+    master, writer = opened("m", "q"), opened("r", "q")
+    holder = hold_lock(master, 1.5)
+    previous = signal.signal(signal.SIGALRM, raise_handler_error)
+    signal.setitimer(signal.ITIMER_REAL, 0.3)
+    try:
+        with pytest.raises(HandlerError):
+            writer.write(TEST_CMD(index=4), timeout=30)
+        assert master.lock_holder() is not None
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
+        holder.join()
+    assert master.lock_holder() is None
+    writer.write(TEST_CMD(index=5))
+    assert master.read().index == 5
