@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import os
 import random
 import signal
 import threading
 import time
+from collections.abc import Callable, Iterator
 
 import pytest
 
@@ -365,32 +367,72 @@ def raise_handler_error(*_: object) -> None:
     raise HandlerError
 
 
-def test_a_handler_raising_as_the_mutex_is_taken_leaves_it_free(opened) -> None:
-    """A signal whose handler raises, arriving as the mutex is taken, is held back until
-    the write is done and the mutex free (it left the mutex taken by this live process)."""
-    master, reader = opened("m", "q"), opened("r", "q")
-    mutex = master._mutex
+class SignalledAsTaken:
+    """A buffer's mutex whose every acquire is followed by ``send()``: a signal arriving
+    just as the mutex is taken."""
 
-    class SignalledAsTaken:
-        def acquire(self, timeout: float | None = None) -> None:
-            mutex.acquire(timeout)
-            os.kill(os.getpid(), signal.SIGUSR1)  # Ctrl-C comes now
+    def __init__(self, mutex: object, send: Callable[[], None]) -> None:
+        self.mutex, self.send = mutex, send
 
-        def __getattr__(self, name: str) -> object:
-            return getattr(mutex, name)
+    def acquire(self, timeout: float | None = None) -> None:
+        self.mutex.acquire(timeout)
+        self.send()
 
-    mask = signal.pthread_sigmask(signal.SIG_BLOCK, ())
+    def __getattr__(self, name: str) -> object:
+        return getattr(self.mutex, name)
+
+
+@contextlib.contextmanager
+def signal_raising_as_taken(buffer: ShmBuffer, send: Callable[[], None]) -> Iterator[None]:
+    """SIGUSR1's handler raises HandlerError, sent by ``send`` as ``buffer``'s mutex is
+    taken; the handler's exception must come out of the block."""
+    mutex = buffer._mutex
     previous = signal.signal(signal.SIGUSR1, raise_handler_error)
-    master._mutex = SignalledAsTaken()
+    buffer._mutex = SignalledAsTaken(mutex, send)
     try:
         with pytest.raises(HandlerError):
-            master.write(TEST_CMD(index=3))
+            yield
     finally:
         signal.signal(signal.SIGUSR1, previous)
-        master._mutex = mutex
-    assert master.lock_holder() is None
+        buffer._mutex = mutex
+
+
+def test_a_handler_raising_as_the_mutex_is_taken_runs_once_it_is_free(opened) -> None:
+    """A signal to this thread, whose handler raises, arriving as the mutex is taken, is
+    held back until the write is done and the mutex free (it left the mutex taken by this
+    live process)."""
+    master, reader = opened("m", "q"), opened("r", "q")
+    mask = signal.pthread_sigmask(signal.SIG_BLOCK, ())
+    me = threading.get_ident()
+    with signal_raising_as_taken(master, lambda: signal.pthread_kill(me, signal.SIGUSR1)):
+        master.write(TEST_CMD(index=3))
+    assert master._mutex.value == 1 and master.lock_holder() is None  # free
     assert reader.read().index == 3  # written before the handler ran
     assert signal.pthread_sigmask(signal.SIG_BLOCK, ()) == mask  # nothing left held back
+
+
+def test_a_handler_raising_as_another_thread_takes_the_signal_frees_the_mutex(opened) -> None:
+    """In a threaded process another thread can take the signal; the main thread runs its
+    handler as the wait for the mutex returns. The write is given up, the mutex freed."""
+    master, reader = opened("m", "q"), opened("r", "q")
+    is_done = threading.Event()
+    other = threading.Thread(target=is_done.wait)  # started here: its signals are not held back
+    other.start()
+
+    def send_to_the_other_thread() -> None:
+        signal.pthread_kill(other.ident, signal.SIGUSR1)
+        time.sleep(0.05)  # its handler trips; this thread runs the Python handler next
+
+    try:
+        with signal_raising_as_taken(master, send_to_the_other_thread):
+            master.write(TEST_CMD(index=3))
+    finally:
+        is_done.set()
+        other.join()
+    assert master._mutex.value == 1 and master.lock_holder() is None  # free
+    assert reader.read() is None
+    master.write(TEST_CMD(index=4))
+    assert reader.read().index == 4
 
 
 def test_a_signal_ends_a_wait_for_a_mutex_a_live_holder_keeps(opened) -> None:
