@@ -38,6 +38,7 @@ import mmap
 import os
 import signal
 import struct
+import threading
 import time
 from dataclasses import dataclass
 
@@ -70,6 +71,11 @@ _STUCK_WRITE_S = 0.05
 # at its next read, and every other process (task writing an error) waits for it. Held back,
 # a signal is delivered when the mutex is released, outside the critical section. The faults
 # a thread raises itself (SIGSEGV...) and SIGABRT (faulthandler's dump) stay deliverable.
+# Another thread of the process (numpy's BLAS threads) may take a signal meant for the
+# process while this one holds it back, and the main thread then runs the handler between
+# any two bytecodes: so the wait for the mutex also frees it when a handler raises as it
+# returns, and a handler raising as the thread lets the mutex go is caught up with at that
+# thread's next lock (see _lock).
 _HELD_BACK_SIGNALS = frozenset(signal.valid_signals()) - {
     signal.SIGKILL,
     signal.SIGSTOP,
@@ -255,6 +261,7 @@ class ShmBuffer:
         self._last_seen = 0
         self._is_locked = False
         self._held_back = 0  # the signals _lock held back, let through by _unlock
+        self._locking_thread = 0  # the thread that holds the mutex (while _is_locked)
         self._reported_holder = 0  # the stuck lock holder last logged
         self._mm: mmap.mmap | None = None
         self._view: memoryview | None = None
@@ -525,6 +532,8 @@ class ShmBuffer:
         """Take the mutex within the P-line timeout (NML-031), repairing after dead holders;
         a live holder that keeps it past LOCK_HELD_REPORT_S is logged with its pid. Signals
         are held back until ``_unlock`` (see _HELD_BACK_SIGNALS)."""
+        if self._is_locked and self._locking_thread == threading.get_ident():
+            self._unlock()  # a handler raised as this thread began to let it go
         limit = self.timeout if timeout is None else timeout
         deadline = None if math.isinf(limit) else time.monotonic() + limit
         held_back = _HELD_BACK_BITS  # (if a handler raises as they are blocked: all)
@@ -535,6 +544,7 @@ class ShmBuffer:
             _let_signals_through(held_back)
             raise
         self._held_back = held_back
+        self._locking_thread = threading.get_ident()
         self._is_locked = True
 
     def _acquire_mutex(self, limit: float, deadline: float | None, held_back: int) -> None:
@@ -606,10 +616,12 @@ class ShmBuffer:
             )
 
     def _unlock(self) -> None:
-        self._put("holder_pid", 0)
-        self._is_locked = False
-        self._mutex.release()
-        _let_signals_through(self._held_back)
+        try:
+            self._put("holder_pid", 0)
+        finally:
+            self._is_locked = False
+            self._mutex.release()
+            _let_signals_through(self._held_back)
 
     def _repair_after_dead_holder(self) -> bool:
         """If the mutex holder died, repair the buffer and free the mutex; True if done."""

@@ -435,6 +435,28 @@ def test_a_handler_raising_as_another_thread_takes_the_signal_frees_the_mutex(op
     assert reader.read().index == 4
 
 
+def test_a_handler_raising_as_the_mutex_is_let_go_is_caught_up_with(opened) -> None:
+    """A handler raising at the first bytecode of _unlock (in a threaded process) leaves the
+    mutex taken; the thread's next lock of the buffer lets it go first, instead of waiting
+    for itself."""
+    master, reader = opened("m", "q"), opened("r", "q")
+    mask = signal.pthread_sigmask(signal.SIG_BLOCK, ())
+    unlock = master._unlock
+
+    def unlock_interrupted() -> None:
+        master._unlock = unlock  # once
+        raise HandlerError
+
+    master._unlock = unlock_interrupted
+    with pytest.raises(HandlerError):
+        master.write(TEST_CMD(index=1))
+    assert master._mutex.value == 0  # left taken
+    master.write(TEST_CMD(index=2))
+    assert master._mutex.value == 1 and master.lock_holder() is None
+    assert [reader.read().index, reader.read().index] == [1, 2]
+    assert signal.pthread_sigmask(signal.SIG_BLOCK, ()) == mask
+
+
 def test_a_signal_ends_a_wait_for_a_mutex_a_live_holder_keeps(opened) -> None:
     """Ctrl-C ends a wait for a stuck holder's mutex (signals are held back only while the
     mutex is held), and the mutex is the holder's until it lets it go."""
