@@ -9,6 +9,8 @@ from __future__ import annotations
 import importlib
 import sys
 
+from cnc.stdio import keep_lines_whole
+
 # Subcommand -> (entry point, one-line help). Add a line here to add a subcommand.
 SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "demo": ("nml.demo:main", "two processes exchanging commands and status over NML"),
@@ -47,6 +49,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"cnc: unknown subcommand '{name}'\n\n{_usage()}", file=sys.stderr)
         return 2
     module_name, func_name = SUBCOMMANDS[name][0].split(":")
+    keep_lines_whole()
     try:
         module = importlib.import_module(module_name)
     except ModuleNotFoundError as exc:

@@ -5,6 +5,12 @@ EPIPE, in the launcher and in every process it started (they inherit it). A mess
 cannot be shown must not stop a controller: ``protect_output()``, called first thing by
 each process, makes the first failed write point the stream (and its file descriptor) at
 /dev/null, so later writes, and Python's flush at exit, succeed.
+
+``keep_lines_whole()`` (called by protect_output, by ``cnc`` for every subcommand and by
+the xhc-hb04 component) keeps each line whole where processes share a stream: with
+PYTHONUNBUFFERED set, ``print`` writes its text and its newline in two calls, and another
+process's line can land between them ("xhc-hb04: waiting for XHC-HB04 deviceFALSE").
+Line buffering writes each printed line in one call, as promptly.
 """
 
 from __future__ import annotations
@@ -44,7 +50,16 @@ class _QuietOnBrokenPipe:
         return getattr(self._stream, name)
 
 
+def keep_lines_whole() -> None:
+    """Line-buffer stdout and stderr where PYTHONUNBUFFERED (or -u) made them write through."""
+    for stream in (sys.stdout, sys.stderr):
+        if getattr(stream, "write_through", False):
+            with contextlib.suppress(AttributeError, ValueError, OSError):
+                stream.reconfigure(line_buffering=True, write_through=False)
+
+
 def protect_output() -> None:
+    keep_lines_whole()
     for name in ("stdout", "stderr"):
         stream = getattr(sys, name)
         if stream is not None and not isinstance(stream, _QuietOnBrokenPipe):
