@@ -188,6 +188,9 @@ def test_lost_packets_then_a_stalled_host_stop_the_machine(machine: Machine) -> 
     assert get(f"{BOARD}.packet-error-exceeded") and get(f"{BOARD}.io_error")
     assert get(f"{BOARD}.packet-error-level") == get(f"{BOARD}.packet-error-limit")
     wait_for(messages_seen(errors, "packet errors"), "the link message")
+    # the stopped link writes nothing: the card's watchdog bites 0.5 s later (the cable
+    # must stay cut that long, or the writes that follow pet it in time)
+    wait_for(lambda: get("sim-7i96s.watchdog.has-bit"), "the card's watchdog biting")
 
     # the cable is back: clear io_error (and the watchdog, which bit meanwhile), reset
     machine.halcmd("setp", "sim-7i96s.is-mute", "0")
