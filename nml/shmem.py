@@ -532,7 +532,8 @@ class ShmBuffer:
         """Take the mutex within the P-line timeout (NML-031), repairing after dead holders;
         a live holder that keeps it past LOCK_HELD_REPORT_S is logged with its pid. Signals
         are held back until ``_unlock`` (see _HELD_BACK_SIGNALS)."""
-        if self._is_locked and self._locking_thread == threading.get_ident():
+        me = threading.get_ident()
+        if self._is_locked and self._locking_thread == me:
             self._unlock()  # a handler raised as this thread began to let it go
         limit = self.timeout if timeout is None else timeout
         deadline = None if math.isinf(limit) else time.monotonic() + limit
@@ -543,8 +544,9 @@ class ShmBuffer:
         except BaseException:
             _let_signals_through(held_back)
             raise
+        # (plain assignments from here: a handler runs at calls and jumps back, not here)
         self._held_back = held_back
-        self._locking_thread = threading.get_ident()
+        self._locking_thread = me
         self._is_locked = True
 
     def _acquire_mutex(self, limit: float, deadline: float | None, held_back: int) -> None:
