@@ -6,8 +6,8 @@ cannot be shown must not stop a controller: ``protect_output()``, called first t
 each process, makes the first failed write point the stream (and its file descriptor) at
 /dev/null, so later writes, and Python's flush at exit, succeed.
 
-``keep_lines_whole()`` (called by protect_output, by ``cnc`` for every subcommand and by
-the xhc-hb04 component) keeps each line whole where processes share a stream: with
+``keep_lines_whole()`` (called by protect_output, by ``cnc`` for every subcommand and when
+a program makes a HAL component) keeps each line whole where processes share a stream: with
 PYTHONUNBUFFERED set, ``print`` writes its text and its newline in two calls, and another
 process's line can land between them ("xhc-hb04: waiting for XHC-HB04 deviceFALSE").
 Line buffering writes each printed line in one call, as promptly.

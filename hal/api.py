@@ -35,6 +35,7 @@ import threading
 from collections.abc import Callable
 from typing import Any, ClassVar
 
+from cnc.stdio import keep_lines_whole
 from hal import core
 from hal.core import (
     DIRS_BY_NAME,
@@ -576,6 +577,7 @@ class component:
         self._is_alive = True
         atexit.register(self.exit)
         _exit_on_sigterm()
+        keep_lines_whole()  # (a component program shares halcmd's terminal)
 
     def newpin(self, name: str, hal_type: int, direction: int) -> Item:
         full = f"{self._prefix}.{name}"

@@ -27,6 +27,7 @@ from typing import Any
 
 import posix_ipc
 
+from cnc.stdio import keep_lines_whole
 from hal import LINUXCNC_NAMES, show
 from hal.api import shared_hal
 from hal.core import (
@@ -196,6 +197,7 @@ class component:
         object.__setattr__(self, "_id", comp_id)
         atexit.register(self.exit)
         _interrupt_on_sigterm()
+        keep_lines_whole()  # (a component program shares halcmd's terminal)
 
     # ------------------------------------------------------------ pins and params
     def _check_live(self) -> None:

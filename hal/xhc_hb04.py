@@ -27,8 +27,6 @@ import time
 from pathlib import Path
 from typing import Any
 
-from cnc.stdio import keep_lines_whole
-
 NAME = "xhc-hb04"
 VENDOR, PRODUCT = "10ce", "eb70"  # the pendant's USB identity
 MAX_WAIT_S = 10  # -x: how long the pendant is waited for before the driver gives up
@@ -197,7 +195,6 @@ class Driver:
 
 
 def main(argv: list[str] | None = None) -> int:
-    keep_lines_whole()  # (its lines share halcmd's terminal)
     try:
         opts, _ = getopt.getopt(sys.argv[1:] if argv is None else argv, "I:hHxs:")
     except getopt.GetoptError as exc:

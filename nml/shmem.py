@@ -23,8 +23,9 @@ Robustness: the mutex holder's pid is recorded. A waiter that cannot get the mut
 whether the holder still lives; if it died, the waiter repairs the buffer (an interrupted
 status write is discarded, a queue is consistent by construction because the tail moves
 last) and releases the mutex, logging what happened. A live holder never keeps it by accident:
-signals are held back while a thread holds it, so no handler (Ctrl-C's KeyboardInterrupt, a
-SIGTERM handler's SystemExit) raises inside the critical section. Corrupt content raises
+signals are held back while a thread holds it, and a handler's exception (Ctrl-C's
+KeyboardInterrupt, a SIGTERM handler's SystemExit) that lands there anyway, from a signal
+another thread took, frees it (see _HELD_BACK_SIGNALS). Corrupt content raises
 ``NmlFormatError`` naming the buffer and never crashes the reader.
 """
 
